@@ -1,0 +1,174 @@
+//! An 8-wide compressed BVH (Ylitie et al. 2017, "Efficient Incoherent Ray Traversal on GPUs
+//! Through Compressed Wide BVHs") built by PLOC with reinsertion, from the `obvhs` crate. The
+//! geometry's primitive table is reordered to the BVH's leaf order so that leaves index it
+//! directly.
+
+use super::Accel;
+use crate::geometry::{Geometry, PrimHit, Ray, RayShear};
+use crate::math::Vec3;
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::Ray as BvhRay;
+use std::time::Duration;
+
+struct Bounds(Aabb);
+
+impl obvhs::Boundable for Bounds {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// The default accelerator.
+pub struct Bvh {
+    tree: Option<CwBvh>,
+}
+
+impl Bvh {
+    /// Builds over `geometry` and reorders its primitive table to the tree's leaf order.
+    pub fn build(geometry: &mut Geometry) -> Self {
+        if geometry.prims.is_empty() {
+            return Self { tree: None };
+        }
+        let bounds: Vec<Bounds> = (0..geometry.prims.len())
+            .map(|i| {
+                let (lo, hi) = geometry.bounds(i);
+                // Pad flat boxes (axis-aligned quads) so that slab tests stay robust.
+                let pad = (hi - lo).max_element().max(1e-6) * 1e-5;
+                Bounds(Aabb::new(
+                    (lo - Vec3::splat(pad)).into(),
+                    (hi + Vec3::splat(pad)).into(),
+                ))
+            })
+            .collect();
+        let mut tree = obvhs::cwbvh::builder::build_cwbvh(
+            &bounds,
+            obvhs::BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        geometry.reorder(&tree.primitive_indices);
+        for (i, idx) in tree.primitive_indices.iter_mut().enumerate() {
+            *idx = i as u32;
+        }
+        Self { tree: Some(tree) }
+    }
+
+    fn bvh_ray(ray: &Ray, t_max: f32) -> BvhRay {
+        BvhRay::new(ray.o.into(), ray.d.into(), 0.0, t_max)
+    }
+}
+
+impl Accel for Bvh {
+    fn intersect(&self, geometry: &Geometry, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+        let tree = self.tree.as_ref()?;
+        let shear = RayShear::new(ray);
+        let mut best: Option<PrimHit> = None;
+        let mut hit = obvhs::ray::RayHit::none();
+        tree.ray_traverse(Self::bvh_ray(ray, t_max), &mut hit, |r, id| match geometry
+            .intersect_prim(id as u32, ray, &shear, r.tmax)
+        {
+            Some((t, b)) => {
+                best = Some(PrimHit {
+                    prim: id as u32,
+                    t,
+                    b,
+                });
+                t
+            }
+            None => f32::INFINITY,
+        });
+        best
+    }
+
+    fn occluded(&self, geometry: &Geometry, ray: &Ray, t_max: f32) -> bool {
+        let Some(tree) = self.tree.as_ref() else {
+            return false;
+        };
+        let shear = RayShear::new(ray);
+        !tree.ray_traverse_miss(Self::bvh_ray(ray, t_max), |_, id| {
+            geometry
+                .intersect_prim(id as u32, ray, &shear, t_max)
+                .map_or(f32::INFINITY, |(t, _)| t)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::BruteForce;
+    use crate::geometry::{Disk, Shape, Sphere, TriangleMesh};
+    use crate::math::rng::Pcg32;
+
+    fn random_geometry(rng: &mut Pcg32) -> Geometry {
+        let mut r3 = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE;
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for t in 0..2000u32 {
+            let c = r3();
+            positions.extend([c, c + r3() * 0.1, c + r3() * 0.1]);
+            indices.push([3 * t, 3 * t + 1, 3 * t + 2]);
+        }
+        let mut shapes = vec![Shape::Mesh(
+            TriangleMesh::new(positions, indices, None, None).unwrap(),
+        )];
+        for _ in 0..20 {
+            shapes.push(Shape::Sphere(Sphere {
+                center: r3(),
+                radius: 0.05,
+                reverse_orientation: false,
+            }));
+            let n = r3().normalize();
+            shapes.push(Shape::Disk(Disk::new(r3(), n, 0.08)));
+        }
+        Geometry::new(shapes)
+    }
+
+    #[test]
+    fn bvh_agrees_with_brute_force() {
+        let mut rng = Pcg32::new(42, 0);
+        let mut geometry = random_geometry(&mut rng);
+        let bvh = Bvh::build(&mut geometry);
+        let mut hits = 0;
+        for i in 0..20_000 {
+            let o =
+                Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - Vec3::splat(1.5);
+            let d = crate::math::warp::uniform_sphere(crate::math::Vec2::new(
+                rng.next_f32(),
+                rng.next_f32(),
+            ));
+            let ray = Ray::new(o, d);
+            let t_max = if i % 3 == 0 { 0.7 } else { f32::INFINITY };
+            let a = bvh.intersect(&geometry, &ray, t_max);
+            let b = BruteForce.intersect(&geometry, &ray, t_max);
+            match (a, b) {
+                (Some(a), Some(b)) => {
+                    hits += 1;
+                    assert!(
+                        (a.t - b.t).abs() <= 1e-6 * b.t.max(1.0),
+                        "t differs: {} vs {}",
+                        a.t,
+                        b.t
+                    );
+                    assert!(
+                        a.prim == b.prim || (a.t - b.t).abs() == 0.0,
+                        "primitive differs"
+                    );
+                }
+                (None, None) => {}
+                _ => panic!("bvh and brute force disagree on ray {i}: {a:?} vs {b:?}"),
+            }
+            assert_eq!(bvh.occluded(&geometry, &ray, t_max), b.is_some());
+        }
+        assert!(hits > 2000, "too few hits ({hits}) for a meaningful test");
+    }
+
+    #[test]
+    fn empty_scene_never_hits() {
+        let mut g = Geometry::default();
+        let bvh = Bvh::build(&mut g);
+        let ray = Ray::new(Vec3::ZERO, Vec3::Z);
+        assert!(bvh.intersect(&g, &ray, f32::INFINITY).is_none());
+        assert!(!bvh.occluded(&g, &ray, f32::INFINITY));
+    }
+}

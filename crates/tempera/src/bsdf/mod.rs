@@ -1,0 +1,136 @@
+//! Scattering functions in the local shading frame (normal = +z; `wo` and `wi` both point away
+//! from the surface), their sampling and densities (pbrt-v4 ch. 9), and the world-space wrapper
+//! [`SurfaceBsdf`] that carries the shading frame.
+
+pub mod conductor;
+pub mod dielectric;
+pub mod diffuse;
+pub mod fresnel;
+pub mod microfacet;
+pub mod plastic;
+
+#[cfg(test)]
+mod tests;
+
+pub use conductor::Conductor;
+pub use dielectric::Dielectric;
+pub use diffuse::Diffuse;
+pub use microfacet::Ggx;
+pub use plastic::Plastic;
+
+use crate::math::frame::Frame;
+use crate::math::{Rgb, Vec2, Vec3};
+
+/// Which quantity a path carries; transmission through a refractive boundary scales radiance by
+/// `1/η²` but importance not (Veach 1997, §5.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportMode {
+    Radiance,
+    Importance,
+}
+
+/// A sampled direction with its BSDF value (without the cosine) and density.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    pub f: Rgb,
+    pub wi: Vec3,
+    /// Solid-angle density; for delta lobes, the discrete probability of the lobe.
+    pub pdf: f32,
+    pub delta: bool,
+    pub transmission: bool,
+}
+
+#[inline]
+pub(crate) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
+    a.z * b.z > 0.0
+}
+
+/// A BSDF at one surface point, in its local frame.
+#[derive(Clone, Copy, Debug)]
+pub enum Bsdf {
+    Diffuse(Diffuse),
+    Conductor(Conductor),
+    Dielectric(Dielectric),
+    Plastic(Plastic),
+}
+
+impl Bsdf {
+    /// BSDF value `f(wo, wi)` of the non-delta lobes.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
+        match self {
+            Bsdf::Diffuse(b) => b.eval(wo, wi),
+            Bsdf::Conductor(b) => b.eval(wo, wi),
+            Bsdf::Dielectric(b) => b.eval(wo, wi, mode),
+            Bsdf::Plastic(b) => b.eval(wo, wi),
+        }
+    }
+
+    /// Solid-angle density with which [`Self::sample`] produces `wi` through non-delta lobes.
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Bsdf::Diffuse(b) => b.pdf(wo, wi),
+            Bsdf::Conductor(b) => b.pdf(wo, wi),
+            Bsdf::Dielectric(b) => b.pdf(wo, wi),
+            Bsdf::Plastic(b) => b.pdf(wo, wi),
+        }
+    }
+
+    /// Samples `wi` given `wo`; `uc` selects a lobe, `u` the direction.
+    #[inline]
+    pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let s = match self {
+            Bsdf::Diffuse(b) => b.sample(wo, u),
+            Bsdf::Conductor(b) => b.sample(wo, u),
+            Bsdf::Dielectric(b) => b.sample(wo, uc, u, mode),
+            Bsdf::Plastic(b) => b.sample(wo, uc, u),
+        }?;
+        (s.pdf > 0.0 && s.f.is_finite() && s.wi.z != 0.0).then_some(s)
+    }
+
+    /// True when every lobe is a Dirac delta: no connection can be made through this BSDF.
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        match self {
+            Bsdf::Diffuse(_) | Bsdf::Plastic(_) => false,
+            Bsdf::Conductor(b) => b.distribution.effectively_smooth(),
+            Bsdf::Dielectric(b) => b.is_delta(),
+        }
+    }
+}
+
+/// A BSDF placed at a surface point: local BSDF plus shading frame and geometric normal.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceBsdf {
+    pub bsdf: Bsdf,
+    pub frame: Frame,
+    pub ng: Vec3,
+}
+
+impl SurfaceBsdf {
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
+        self.bsdf
+            .eval(self.frame.to_local(wo), self.frame.to_local(wi), mode)
+    }
+
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.bsdf
+            .pdf(self.frame.to_local(wo), self.frame.to_local(wi))
+    }
+
+    /// Samples a world-space direction; `wi` in the result is in world space.
+    #[inline]
+    pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let mut s = self.bsdf.sample(self.frame.to_local(wo), uc, u, mode)?;
+        s.wi = self.frame.to_world(s.wi).normalize();
+        Some(s)
+    }
+
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        self.bsdf.is_delta()
+    }
+}

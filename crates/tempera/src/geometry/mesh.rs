@@ -1,0 +1,169 @@
+//! Indexed triangle meshes with optional per-vertex normals and texture coordinates; surface
+//! data at a hit follows pbrt-v4 §6.5.3 (uv parametrisation, `dpdu`, shading normals).
+
+use super::SurfacePoint;
+use crate::math::{Mat4, Vec2, Vec3};
+
+/// An error found while validating mesh data.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum MeshError {
+    #[error("vertex index {index} out of range (mesh has {count} vertices)")]
+    IndexOutOfRange { index: u32, count: usize },
+    #[error("{what} has {got} entries but the mesh has {want} vertices")]
+    AttributeCount {
+        what: &'static str,
+        got: usize,
+        want: usize,
+    },
+    #[error("non-finite vertex position")]
+    NonFinite,
+}
+
+/// A triangle mesh in world space.
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    pub indices: Vec<[u32; 3]>,
+    /// Flip the geometric normal (pbrt's `ReverseOrientation`, Mitsuba's `flipNormals`).
+    pub reverse_orientation: bool,
+}
+
+impl TriangleMesh {
+    /// Builds and validates a mesh.
+    pub fn new(
+        positions: Vec<Vec3>,
+        indices: Vec<[u32; 3]>,
+        normals: Option<Vec<Vec3>>,
+        uvs: Option<Vec<Vec2>>,
+    ) -> Result<Self, MeshError> {
+        let count = positions.len();
+        if let Some(&index) = indices.iter().flatten().find(|&&i| i as usize >= count) {
+            return Err(MeshError::IndexOutOfRange { index, count });
+        }
+        if positions.iter().any(|p| !p.is_finite()) {
+            return Err(MeshError::NonFinite);
+        }
+        if let Some(n) = &normals
+            && n.len() != count
+        {
+            return Err(MeshError::AttributeCount {
+                what: "normals",
+                got: n.len(),
+                want: count,
+            });
+        }
+        if let Some(uv) = &uvs
+            && uv.len() != count
+        {
+            return Err(MeshError::AttributeCount {
+                what: "uvs",
+                got: uv.len(),
+                want: count,
+            });
+        }
+        Ok(Self {
+            positions,
+            normals,
+            uvs,
+            indices,
+            reverse_orientation: false,
+        })
+    }
+
+    /// Transforms the mesh in place (normals by the inverse transpose). A transform that swaps
+    /// handedness flips the geometric normal, as in pbrt.
+    pub fn transform(&mut self, m: &Mat4) {
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+        let normal_m = m.inverse().transpose();
+        if let Some(ns) = &mut self.normals {
+            for n in ns.iter_mut() {
+                *n = normal_m.transform_vector3(*n).normalize_or_zero();
+            }
+        }
+        if m.determinant() < 0.0 {
+            self.reverse_orientation = !self.reverse_orientation;
+        }
+    }
+
+    #[inline]
+    pub fn vertices(&self, tri: u32) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[tri as usize];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+
+    pub fn area(&self, tri: u32) -> f32 {
+        let [p0, p1, p2] = self.vertices(tri);
+        0.5 * (p1 - p0).cross(p2 - p0).length()
+    }
+
+    fn uvs_of(&self, tri: u32) -> [Vec2; 3] {
+        match &self.uvs {
+            Some(uv) => self.indices[tri as usize].map(|i| uv[i as usize]),
+            None => [
+                Vec2::new(0.0, 0.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(1.0, 1.0),
+            ],
+        }
+    }
+
+    /// Surface data at barycentrics `b` of triangle `tri`.
+    pub fn surface(&self, tri: u32, b: Vec3) -> SurfacePoint {
+        let [p0, p1, p2] = self.vertices(tri);
+        let uv = self.uvs_of(tri);
+        let p = b.x * p0 + b.y * p1 + b.z * p2;
+        let uv_hit = b.x * uv[0] + b.y * uv[1] + b.z * uv[2];
+        let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        if ng == Vec3::ZERO {
+            ng = Vec3::Z;
+        }
+        let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
+        let (dp02, dp12) = (p0 - p2, p1 - p2);
+        let det = duv02.x * duv12.y - duv02.y * duv12.x;
+        let mut dpdu = if det.abs() < 1e-12 {
+            Vec3::ZERO
+        } else {
+            (duv12.y * dp02 - duv02.y * dp12) / det
+        };
+        if !dpdu.is_finite() {
+            dpdu = Vec3::ZERO;
+        }
+        let ns = match &self.normals {
+            Some(n) => {
+                let [a, bb, c] = self.indices[tri as usize];
+                let ns = b.x * n[a as usize] + b.y * n[bb as usize] + b.z * n[c as usize];
+                let ns = ns.normalize_or_zero();
+                if ns == Vec3::ZERO { None } else { Some(ns) }
+            }
+            None => None,
+        };
+        let (ng, ns) = match ns {
+            Some(ns) => (if ng.dot(ns) < 0.0 { -ng } else { ng }, ns),
+            None => {
+                let ng = if self.reverse_orientation { -ng } else { ng };
+                (ng, ng)
+            }
+        };
+        SurfacePoint {
+            p,
+            ng,
+            ns,
+            uv: uv_hit,
+            dpdu,
+        }
+    }
+
+    /// Uniform area sample on triangle `tri`: the surface point and the area density.
+    pub fn sample(&self, tri: u32, u: Vec2) -> (SurfacePoint, f32) {
+        let b = crate::math::warp::uniform_triangle(u);
+        (self.surface(tri, b), 1.0 / self.area(tri))
+    }
+}

@@ -1,0 +1,202 @@
+//! Geometry: rays, shapes (triangle meshes, analytic spheres and disks) and the flat table of
+//! primitives the accelerator indexes.
+
+pub mod disk;
+pub mod mesh;
+pub mod ray;
+pub mod sphere;
+pub mod triangle;
+
+pub use disk::Disk;
+pub use mesh::{MeshError, TriangleMesh};
+pub use ray::{Ray, spawn_ray, spawn_ray_to};
+pub use sphere::{ShapeSample, Sphere};
+pub use triangle::{RayShear, intersect_triangle};
+
+use crate::math::{Vec2, Vec3};
+
+/// Geometric data of a surface point.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    pub p: Vec3,
+    /// Geometric normal (orientation as the shape defines it).
+    pub ng: Vec3,
+    /// Shading normal (interpolated vertex normals, or `ng`).
+    pub ns: Vec3,
+    pub uv: Vec2,
+    pub dpdu: Vec3,
+}
+
+/// A shape as stored in the scene.
+#[derive(Clone, Debug)]
+pub enum Shape {
+    Mesh(TriangleMesh),
+    Sphere(Sphere),
+    Disk(Disk),
+}
+
+impl Shape {
+    /// Number of primitives the shape contributes to the accelerator.
+    pub fn primitive_count(&self) -> usize {
+        match self {
+            Shape::Mesh(m) => m.indices.len(),
+            Shape::Sphere(_) | Shape::Disk(_) => 1,
+        }
+    }
+}
+
+/// One intersectable primitive: a triangle of a mesh, or a whole analytic shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrimRef {
+    pub shape: u32,
+    pub index: u32,
+}
+
+/// The parameters at which a primitive was hit (barycentrics for triangles).
+#[derive(Clone, Copy, Debug)]
+pub struct PrimHit {
+    pub prim: u32,
+    pub t: f32,
+    pub b: Vec3,
+}
+
+/// All shapes of a scene and the primitive table over them.
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    pub shapes: Vec<Shape>,
+    pub prims: Vec<PrimRef>,
+}
+
+impl Geometry {
+    pub fn new(shapes: Vec<Shape>) -> Self {
+        let prims = shapes
+            .iter()
+            .enumerate()
+            .flat_map(|(s, shape)| {
+                (0..shape.primitive_count() as u32).map(move |index| PrimRef {
+                    shape: s as u32,
+                    index,
+                })
+            })
+            .collect();
+        Self { shapes, prims }
+    }
+
+    /// Axis-aligned bounds of primitive `i`.
+    pub fn bounds(&self, i: usize) -> (Vec3, Vec3) {
+        let r = self.prims[i];
+        match &self.shapes[r.shape as usize] {
+            Shape::Mesh(m) => {
+                let [a, b, c] = m.vertices(r.index);
+                (a.min(b).min(c), a.max(b).max(c))
+            }
+            Shape::Sphere(s) => (
+                s.center - Vec3::splat(s.radius),
+                s.center + Vec3::splat(s.radius),
+            ),
+            Shape::Disk(d) => {
+                let n = d.frame.n;
+                let ext = Vec3::new(
+                    (1.0 - n.x * n.x).max(0.0).sqrt(),
+                    (1.0 - n.y * n.y).max(0.0).sqrt(),
+                    (1.0 - n.z * n.z).max(0.0).sqrt(),
+                ) * d.radius;
+                (d.center - ext, d.center + ext)
+            }
+        }
+    }
+
+    /// Intersects primitive `i`, returning the distance and hit parameters.
+    #[inline]
+    pub fn intersect_prim(
+        &self,
+        i: u32,
+        ray: &Ray,
+        shear: &RayShear,
+        t_max: f32,
+    ) -> Option<(f32, Vec3)> {
+        let r = self.prims[i as usize];
+        match &self.shapes[r.shape as usize] {
+            Shape::Mesh(m) => {
+                intersect_triangle(ray, shear, m.vertices(r.index), t_max).map(|h| (h.t, h.b))
+            }
+            Shape::Sphere(s) => s.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
+            Shape::Disk(d) => d.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
+        }
+    }
+
+    /// Surface data at a hit found by an accelerator.
+    pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> SurfacePoint {
+        let r = self.prims[hit.prim as usize];
+        match &self.shapes[r.shape as usize] {
+            Shape::Mesh(m) => m.surface(r.index, hit.b),
+            Shape::Sphere(s) => s.surface(ray.at(hit.t)),
+            Shape::Disk(d) => d.surface(ray.at(hit.t)),
+        }
+    }
+
+    /// Surface area of primitive `i`.
+    pub fn area(&self, i: u32) -> f32 {
+        let r = self.prims[i as usize];
+        match &self.shapes[r.shape as usize] {
+            Shape::Mesh(m) => m.area(r.index),
+            Shape::Sphere(s) => s.area(),
+            Shape::Disk(d) => d.area(),
+        }
+    }
+
+    /// Samples a point on primitive `i` as seen from `reference`; the density is per unit solid
+    /// angle at `reference`.
+    pub fn sample_from(&self, i: u32, reference: Vec3, u: Vec2) -> Option<ShapeSample> {
+        let r = self.prims[i as usize];
+        let area_sample = match &self.shapes[r.shape as usize] {
+            Shape::Sphere(s) => return s.sample_from(reference, u),
+            Shape::Mesh(m) => {
+                let (point, pdf) = m.sample(r.index, u);
+                ShapeSample { point, pdf }
+            }
+            Shape::Disk(d) => d.sample_area(u),
+        };
+        let w = area_sample.point.p - reference;
+        let d2 = w.length_squared();
+        let cos = area_sample.point.ng.dot(w).abs() / d2.sqrt();
+        if d2 == 0.0 || !(cos > 0.0) {
+            return None;
+        }
+        Some(ShapeSample {
+            point: area_sample.point,
+            pdf: area_sample.pdf * d2 / cos,
+        })
+    }
+
+    /// Solid-angle density of [`Self::sample_from`] for the point `hit` on primitive `i`.
+    pub fn pdf_from(&self, i: u32, reference: Vec3, hit: &SurfacePoint) -> f32 {
+        let r = self.prims[i as usize];
+        if let Shape::Sphere(s) = &self.shapes[r.shape as usize] {
+            return s.pdf_from(reference, hit);
+        }
+        let w = hit.p - reference;
+        let d2 = w.length_squared();
+        let cos = hit.ng.dot(w).abs() / d2.sqrt();
+        if !(cos > 0.0) {
+            return 0.0;
+        }
+        d2 / (cos * self.area(i))
+    }
+
+    /// Bounding box of everything.
+    pub fn world_bounds(&self) -> (Vec3, Vec3) {
+        (0..self.prims.len()).fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), i| {
+                let (a, b) = self.bounds(i);
+                (lo.min(a), hi.max(b))
+            },
+        )
+    }
+
+    /// Reorders the primitive table (the accelerator stores primitives in its own order).
+    pub fn reorder(&mut self, order: &[u32]) {
+        self.prims = order.iter().map(|&i| self.prims[i as usize]).collect();
+    }
+}

@@ -1,0 +1,155 @@
+//! Watertight ray–triangle intersection (Woop, Benthin & Wald 2013, "Watertight Ray/Triangle
+//! Intersection", JCGT 2(1)); pbrt-v4 §6.5.3 follows the same construction.
+
+use super::Ray;
+use crate::math::Vec3;
+
+/// Per-ray constants of the watertight test: the axis permutation and the shear.
+#[derive(Clone, Copy, Debug)]
+pub struct RayShear {
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    sx: f32,
+    sy: f32,
+    sz: f32,
+}
+
+impl RayShear {
+    pub fn new(ray: &Ray) -> Self {
+        let a = ray.d.abs();
+        let kz = if a.x > a.y {
+            if a.x > a.z { 0 } else { 2 }
+        } else if a.y > a.z {
+            1
+        } else {
+            2
+        };
+        let kx = (kz + 1) % 3;
+        let ky = (kx + 1) % 3;
+        let d = ray.d;
+        Self {
+            kx,
+            ky,
+            kz,
+            sx: -d[kx] / d[kz],
+            sy: -d[ky] / d[kz],
+            sz: 1.0 / d[kz],
+        }
+    }
+}
+
+/// Hit distance and barycentrics `(b0, b1, b2)` weighting the vertices `p0, p1, p2`.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleHit {
+    pub t: f32,
+    pub b: Vec3,
+}
+
+/// Intersects `ray` with triangle `(p0, p1, p2)` for `0 < t < t_max`.
+#[inline]
+pub fn intersect_triangle(
+    ray: &Ray,
+    shear: &RayShear,
+    p: [Vec3; 3],
+    t_max: f32,
+) -> Option<TriangleHit> {
+    let RayShear {
+        kx,
+        ky,
+        kz,
+        sx,
+        sy,
+        sz,
+    } = *shear;
+    let rel = p.map(|v| v - ray.o);
+    let mut q = rel.map(|v| Vec3::new(v[kx], v[ky], v[kz]));
+    for v in q.iter_mut() {
+        v.x += sx * v.z;
+        v.y += sy * v.z;
+    }
+    let mut e0 = q[1].x * q[2].y - q[1].y * q[2].x;
+    let mut e1 = q[2].x * q[0].y - q[2].y * q[0].x;
+    let mut e2 = q[0].x * q[1].y - q[0].y * q[1].x;
+    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+        let f = |a: Vec3, b: Vec3| {
+            (f64::from(a.x) * f64::from(b.y) - f64::from(a.y) * f64::from(b.x)) as f32
+        };
+        e0 = f(q[1], q[2]);
+        e1 = f(q[2], q[0]);
+        e2 = f(q[0], q[1]);
+    }
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    if det == 0.0 {
+        return None;
+    }
+    let z = [q[0].z * sz, q[1].z * sz, q[2].z * sz];
+    let t_scaled = e0 * z[0] + e1 * z[1] + e2 * z[2];
+    if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
+        return None;
+    }
+    if det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det) {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if !(t > 0.0 && t < t_max) {
+        return None;
+    }
+    Some(TriangleHit {
+        t,
+        b: Vec3::new(e0, e1, e2) * inv_det,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::rng::Pcg32;
+
+    #[test]
+    fn hits_inside_and_misses_outside() {
+        let tri = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
+        let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
+        let h = intersect_triangle(&ray, &RayShear::new(&ray), tri, f32::INFINITY).unwrap();
+        assert!((h.t - 1.0).abs() < 1e-6);
+        assert!((h.b - Vec3::new(0.5, 0.25, 0.25)).length() < 1e-6);
+        let ray = Ray::new(Vec3::new(0.75, 0.75, 1.0), -Vec3::Z);
+        assert!(intersect_triangle(&ray, &RayShear::new(&ray), tri, f32::INFINITY).is_none());
+        let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
+        assert!(intersect_triangle(&ray, &RayShear::new(&ray), tri, 0.5).is_none());
+    }
+
+    #[test]
+    fn shared_edges_are_watertight() {
+        // Two triangles sharing a diagonal: rays through the diagonal must hit at least one.
+        let a = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+        ];
+        let b = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
+        let mut rng = Pcg32::new(11, 0);
+        for _ in 0..20_000 {
+            let s = rng.next_f32();
+            let target = Vec3::new(s, s, 0.0);
+            let o = Vec3::new(rng.next_f32() * 4.0 - 2.0, rng.next_f32() * 4.0 - 2.0, 3.0);
+            let ray = Ray::new(o, (target - o).normalize());
+            let sh = RayShear::new(&ray);
+            let hit = intersect_triangle(&ray, &sh, a, f32::INFINITY).is_some()
+                || intersect_triangle(&ray, &sh, b, f32::INFINITY).is_some();
+            assert!(hit, "ray through the shared edge leaked at s = {s}");
+        }
+    }
+}

@@ -1,0 +1,12 @@
+//! Tempera core: geometry, acceleration, textures, BSDFs, materials, lights, camera, samplers,
+//! film and the light-transport integrators. The core knows no scene format and no command
+//! line; loaders build scenes through [`scene::SceneBuilder`].
+
+pub mod accel;
+pub mod bsdf;
+pub mod geometry;
+pub mod math;
+pub mod texture;
+
+#[cfg(test)]
+pub(crate) mod testing;
