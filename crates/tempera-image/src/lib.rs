@@ -1,1 +1,219 @@
+//! Image input and output for Tempera: OpenEXR (32-bit float, via the `exr` crate), PFM
+//! (Portable Float Map, written by hand), and 8-bit PNG/JPEG/TGA (via the `image` crate) with
+//! sRGB transfer functions. Formats are chosen by file extension.
 
+mod color;
+mod pfm;
+
+pub use color::{ColorEncoding, linear_to_srgb, srgb_to_linear};
+
+use std::path::{Path, PathBuf};
+use tempera::math::Rgb;
+use tempera::texture::Image;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: unsupported image format (expected .exr, .pfm, .png, .jpg, .jpeg or .tga)")]
+    UnsupportedFormat { path: PathBuf },
+    #[error("{path}: {message}")]
+    Malformed { path: PathBuf, message: String },
+}
+
+/// The file formats Tempera reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Exr,
+    Pfm,
+    Png,
+    Jpeg,
+    Tga,
+}
+
+impl Format {
+    pub fn from_path(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "exr" => Some(Format::Exr),
+            "pfm" => Some(Format::Pfm),
+            "png" => Some(Format::Png),
+            "jpg" | "jpeg" => Some(Format::Jpeg),
+            "tga" => Some(Format::Tga),
+            _ => None,
+        }
+    }
+
+    /// True for formats that store linear floating-point values.
+    pub fn is_float(self) -> bool {
+        matches!(self, Format::Exr | Format::Pfm)
+    }
+}
+
+/// Options for writing low-dynamic-range files.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WriteOptions {
+    /// Exposure in stops applied before sRGB encoding (PNG only).
+    pub exposure: f32,
+}
+
+impl Default for WriteOptions {
+    fn default() -> Self {
+        Self { exposure: 0.0 }
+    }
+}
+
+fn malformed(path: &Path, message: impl ToString) -> ImageError {
+    ImageError::Malformed {
+        path: path.to_owned(),
+        message: message.to_string(),
+    }
+}
+
+/// Writes `image` in the format given by `path`'s extension. EXR and PFM are linear float;
+/// PNG is sRGB-encoded 8-bit after applying the exposure.
+pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result<(), ImageError> {
+    let format = Format::from_path(path).ok_or_else(|| ImageError::UnsupportedFormat {
+        path: path.to_owned(),
+    })?;
+    match format {
+        Format::Exr => exr::prelude::write_rgb_file(path, image.width, image.height, |x, y| {
+            let p = image.get(x, y);
+            (p.x, p.y, p.z)
+        })
+        .map_err(|e| malformed(path, e)),
+        Format::Pfm => pfm::write(path, image),
+        Format::Png | Format::Jpeg | Format::Tga => {
+            let scale = options.exposure.exp2();
+            let bytes: Vec<u8> = image
+                .pixels
+                .iter()
+                .flat_map(|p| (*p * scale).to_array())
+                .map(|v| {
+                    (linear_to_srgb(if v.is_finite() { v } else { 0.0 }) * 255.0 + 0.5)
+                        .clamp(0.0, 255.0) as u8
+                })
+                .collect();
+            let buffer = image::RgbImage::from_raw(image.width as u32, image.height as u32, bytes)
+                .ok_or_else(|| malformed(path, "image size overflow"))?;
+            buffer.save(path).map_err(|e| malformed(path, e))
+        }
+    }
+}
+
+/// Reads an image as linear RGB. `encoding` applies to 8-bit formats (float formats are linear).
+pub fn read_image(path: &Path, encoding: ColorEncoding) -> Result<Image, ImageError> {
+    let format = Format::from_path(path).ok_or_else(|| ImageError::UnsupportedFormat {
+        path: path.to_owned(),
+    })?;
+    if !path.exists() {
+        return Err(ImageError::Io {
+            path: path.to_owned(),
+            source: std::io::ErrorKind::NotFound.into(),
+        });
+    }
+    match format {
+        Format::Pfm => pfm::read(path),
+        Format::Exr => read_exr(path),
+        Format::Png | Format::Jpeg | Format::Tga => {
+            let dynamic = image::open(path).map_err(|e| malformed(path, e))?;
+            let rgb = dynamic.to_rgb32f();
+            let (w, h) = (rgb.width() as usize, rgb.height() as usize);
+            let pixels = rgb
+                .pixels()
+                .map(|p| {
+                    Rgb::new(
+                        encoding.decode(p[0]),
+                        encoding.decode(p[1]),
+                        encoding.decode(p[2]),
+                    )
+                })
+                .collect();
+            Ok(Image::new(w, h, pixels))
+        }
+    }
+}
+
+fn read_exr(path: &Path) -> Result<Image, ImageError> {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| Image::filled(resolution.width(), resolution.height(), Rgb::ZERO),
+        |img: &mut Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let w = img.width;
+            img.pixels[pos.y() * w + pos.x()] = Rgb::new(r, g, b);
+        },
+    )
+    .map_err(|e| malformed(path, e))?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample_image() -> Image {
+        let pixels = (0..12)
+            .map(|i| Rgb::new(i as f32 * 0.25, 1.0 / (i as f32 + 1.0), 3.5))
+            .collect();
+        Image::new(4, 3, pixels)
+    }
+
+    #[test]
+    fn float_formats_round_trip_exactly() {
+        let dir = std::env::temp_dir().join(format!("tempera-image-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let img = sample_image();
+        for name in ["a.exr", "a.pfm"] {
+            let path = dir.join(name);
+            write_image(&path, &img, &WriteOptions::default()).unwrap();
+            let back = read_image(&path, ColorEncoding::Linear).unwrap();
+            assert_eq!(back, img, "{name} round trip");
+        }
+    }
+
+    #[test]
+    fn png_is_srgb_encoded_and_decoded_to_linear() {
+        let dir = std::env::temp_dir().join(format!("tempera-png-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("a.png");
+        let img = Image::new(2, 1, vec![Rgb::splat(0.2158), Rgb::new(1.0, 0.0, 0.5)]);
+        write_image(&path, &img, &WriteOptions::default()).unwrap();
+        let raw = image::open(&path).unwrap().to_rgb8();
+        assert_eq!(
+            raw.get_pixel(0, 0)[0],
+            128,
+            "linear 0.2158 encodes to sRGB 128"
+        );
+        let back = read_image(&path, ColorEncoding::Srgb).unwrap();
+        for (a, b) in back.pixels.iter().zip(&img.pixels) {
+            assert!((*a - *b).abs().max_element() < 0.005, "{a} vs {b}");
+        }
+        // One stop of exposure doubles the linear value before encoding.
+        write_image(
+            &path,
+            &Image::new(1, 1, vec![Rgb::splat(0.1079)]),
+            &WriteOptions { exposure: 1.0 },
+        )
+        .unwrap();
+        assert_eq!(
+            image::open(&path).unwrap().to_rgb8().get_pixel(0, 0)[0],
+            128
+        );
+    }
+
+    #[test]
+    fn errors_name_the_file() {
+        let err = read_image(Path::new("/nonexistent/x.exr"), ColorEncoding::Linear).unwrap_err();
+        assert!(err.to_string().contains("/nonexistent/x.exr"));
+        let err = write_image(
+            Path::new("out.bmp"),
+            &sample_image(),
+            &WriteOptions::default(),
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("unsupported"));
+    }
+}

@@ -8,5 +8,13 @@ pub mod geometry;
 pub mod math;
 pub mod texture;
 
+pub mod camera;
+pub mod film;
+pub mod integrator;
+pub mod light;
+pub mod material;
+pub mod sampler;
+pub mod scene;
+pub mod scenes;
 #[cfg(test)]
 pub(crate) mod testing;

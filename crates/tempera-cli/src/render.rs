@@ -1,0 +1,220 @@
+//! `tempera render`: load (or build) a scene, render it with the chosen integrator under a sample
+//! or time budget, and write the image in the formats the output names ask for. Ctrl-C stops the
+//! render and still writes what was rendered.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+use tempera::integrator::{self, Budget, RenderControl, RenderSettings};
+use tempera::scene::Scene;
+use tempera_image::{WriteOptions, write_image};
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Scene file (.pbrt or .xml); omitted renders the embedded default scene.
+    pub scene: Option<PathBuf>,
+    /// Light-transport algorithm.
+    #[arg(long, default_value = "path", value_parser = clap::builder::PossibleValuesParser::new(integrator::INTEGRATORS))]
+    pub integrator: String,
+    /// Samples per pixel (default: the scene's).
+    #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Render for this many seconds instead of a fixed sample count.
+    #[arg(long, value_parser = parse_seconds)]
+    pub time: Option<f64>,
+    /// Seed of every random number of the render.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (0: all cores).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Film resolution WIDTHxHEIGHT, overriding the scene's (the field of view keeps spanning the
+    /// shorter axis).
+    #[arg(long, value_parser = parse_resolution)]
+    pub resolution: Option<(u32, u32)>,
+    /// Maximum number of scattering events per path (pbrt's maxdepth; default: the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=100_000))]
+    pub maxdepth: Option<u32>,
+    /// Output image(s): .exr, .pfm or .png (repeatable). Default: tempera.exr and tempera.png.
+    #[arg(short, long = "output")]
+    pub output: Vec<PathBuf>,
+    /// Exposure in stops for PNG output.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// No progress bar and no summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("expected a positive number of seconds, got '{s}'")),
+    }
+}
+
+fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let err = || format!("expected WIDTHxHEIGHT such as 640x480, got '{s}'");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(err)?;
+    let (w, h): (u32, u32) = (
+        w.trim().parse().map_err(|_| err())?,
+        h.trim().parse().map_err(|_| err())?,
+    );
+    if w == 0 || h == 0 || w > 65_536 || h > 65_536 {
+        return Err(format!(
+            "resolution must be between 1x1 and 65536x65536, got '{s}'"
+        ));
+    }
+    Ok((w, h))
+}
+
+static CANCEL: AtomicBool = AtomicBool::new(false);
+
+/// Ctrl-C asks the render to stop and write what it has; a second Ctrl-C exits at once.
+fn install_interrupt_handler() {
+    let installed = ctrlc::set_handler(|| {
+        if CANCEL.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
+    if let Err(e) = installed {
+        eprintln!("warning: Ctrl-C will not stop the render cleanly: {e}");
+    }
+}
+
+fn load_scene(args: &RenderArgs) -> Result<Scene> {
+    let builder = match &args.scene {
+        Some(path) => tempera_scene::load(path)?,
+        None => tempera::scenes::default_scene(),
+    };
+    let mut scene = builder.build().context("invalid scene")?;
+    if let Some((w, h)) = args.resolution {
+        scene.set_resolution(w, h);
+    }
+    Ok(scene)
+}
+
+fn outputs(args: &RenderArgs) -> Result<Vec<PathBuf>> {
+    if args.output.is_empty() {
+        return Ok(vec![
+            PathBuf::from("tempera.exr"),
+            PathBuf::from("tempera.png"),
+        ]);
+    }
+    for path in &args.output {
+        if tempera_image::Format::from_path(path).is_none() {
+            bail!(
+                "{}: unsupported output format (expected .exr, .pfm or .png)",
+                path.display()
+            );
+        }
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
+            && !dir.is_dir()
+        {
+            bail!(
+                "{}: folder {} does not exist",
+                path.display(),
+                dir.display()
+            );
+        }
+    }
+    Ok(args.output.clone())
+}
+
+fn progress_bar(args: &RenderArgs, budget: Budget, pixels: u64) -> ProgressBar {
+    if args.quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let (len, template) = match budget {
+        Budget::Samples(spp) => (
+            pixels * u64::from(spp),
+            "{elapsed_precise} [{wide_bar}] {percent}% (eta {eta})",
+        ),
+        Budget::Time(d) => (d.as_millis() as u64, "{elapsed_precise} [{wide_bar}] {msg}"),
+    };
+    let bar = ProgressBar::new(len);
+    bar.set_style(
+        ProgressStyle::with_template(template)
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    let outputs = outputs(&args)?;
+    let scene = load_scene(&args)?;
+    let max_depth = args.maxdepth.unwrap_or(scene.defaults.max_depth);
+    let integrator = integrator::create(&args.integrator, max_depth)
+        .with_context(|| format!("unknown integrator '{}'", args.integrator))?;
+    let budget = match args.time {
+        Some(t) => Budget::Time(Duration::from_secs_f64(t)),
+        None => Budget::Samples(args.spp.unwrap_or(scene.defaults.spp)),
+    };
+    let settings = RenderSettings {
+        budget,
+        seed: args.seed,
+        threads: args.threads,
+    };
+    let pixels = u64::from(scene.film.width) * u64::from(scene.film.height);
+    let bar = progress_bar(&args, budget, pixels);
+    let start = Instant::now();
+    let on_progress = |n: u64| match budget {
+        Budget::Samples(_) => bar.inc(n),
+        Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
+    };
+    install_interrupt_handler();
+    let control = RenderControl {
+        cancel: &CANCEL,
+        on_progress: &on_progress,
+    };
+    let out = integrator.render(&scene, &settings, &control);
+    bar.finish_and_clear();
+
+    let options = WriteOptions {
+        exposure: args.exposure,
+    };
+    for path in &outputs {
+        write_image(path, &out.image, &options)?;
+    }
+    if !args.quiet {
+        summary(&args, &scene, integrator.name(), &out.stats, &outputs);
+    }
+    Ok(())
+}
+
+fn summary(
+    args: &RenderArgs,
+    scene: &Scene,
+    name: &str,
+    s: &tempera::integrator::RenderStats,
+    outputs: &[PathBuf],
+) {
+    let names: Vec<_> = outputs.iter().map(|p| p.display().to_string()).collect();
+    let scene_name = args.scene.as_deref().map_or_else(
+        || "default scene".to_owned(),
+        |p: &Path| p.display().to_string(),
+    );
+    let pixels = f64::from(scene.film.width) * f64::from(scene.film.height);
+    let spp = s.pixel_samples as f64 / pixels;
+    let status = if s.cancelled { "interrupted: " } else { "" };
+    eprintln!(
+        "{status}{scene_name} ({}x{}) with {name}: {spp:.1} spp in {:.2} s, {:.2} Mrays/s, {:.2} Msamples/s -> {}",
+        scene.film.width,
+        scene.film.height,
+        s.seconds,
+        s.rays as f64 / s.seconds.max(1e-9) / 1e6,
+        s.pixel_samples as f64 / s.seconds.max(1e-9) / 1e6,
+        names.join(", ")
+    );
+    if s.invalid_samples > 0 {
+        eprintln!(
+            "warning: {} samples were NaN, infinite or negative and were recorded as black",
+            s.invalid_samples
+        );
+    }
+}

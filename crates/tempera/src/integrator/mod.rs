@@ -1,0 +1,81 @@
+//! Integrators and the render loop they share. An integrator is chosen once per render (the
+//! [`Integrator`] trait object); per-pixel estimators such as the path tracer plug into the tile
+//! driver in [`tiles`].
+
+pub mod path;
+pub mod tiles;
+
+#[cfg(test)]
+mod tests;
+
+pub use path::PathIntegrator;
+
+use crate::scene::Scene;
+use crate::texture::Image;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+/// How much work a render does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Budget {
+    /// A fixed number of samples per pixel: deterministic for a given seed.
+    Samples(u32),
+    /// Wall-clock time: as many samples as fit.
+    Time(Duration),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub budget: Budget,
+    pub seed: u64,
+    /// Worker threads; 0 uses every core.
+    pub threads: usize,
+}
+
+/// Interaction with a running render: a cancellation flag (Ctrl-C) and a progress callback that
+/// receives increments of completed pixel samples.
+pub struct RenderControl<'a> {
+    pub cancel: &'a AtomicBool,
+    pub on_progress: &'a (dyn Fn(u64) + Sync),
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Samples per pixel that every pixel received.
+    pub spp_completed: u32,
+    pub pixel_samples: u64,
+    pub rays: u64,
+    /// Samples whose value was NaN, infinite or negative (recorded as black).
+    pub invalid_samples: u64,
+    pub seconds: f64,
+    /// True when the render stopped early on request.
+    pub cancelled: bool,
+}
+
+pub struct RenderOutput {
+    pub image: Image,
+    pub stats: RenderStats,
+}
+
+/// A light-transport algorithm.
+pub trait Integrator: Send + Sync {
+    fn name(&self) -> &'static str;
+    fn render(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> RenderOutput;
+}
+
+/// Names accepted by [`create`].
+pub const INTEGRATORS: &[&str] = &["path"];
+
+/// The integrator called `name`, with maximum path depth `max_depth` (pbrt's meaning: the number
+/// of scattering events).
+pub fn create(name: &str, max_depth: u32) -> Option<Box<dyn Integrator>> {
+    match name {
+        "path" => Some(Box::new(PathIntegrator { max_depth })),
+        _ => None,
+    }
+}

@@ -1,0 +1,161 @@
+//! Unidirectional path tracing with next-event estimation and BSDF sampling combined by the
+//! power heuristic, and Russian roulette after a few bounces (Veach 1997 §9; pbrt-v4 §13.4).
+//! `max_depth` counts scattering events as pbrt does: 0 shows emitters only, 1 adds direct light.
+
+use super::tiles::{PixelEstimator, render_tiles};
+use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
+use crate::bsdf::{SurfaceBsdf, TransportMode};
+use crate::geometry::{Ray, spawn_ray, spawn_ray_to};
+use crate::math::{Rgb, Vec3, power_heuristic};
+use crate::sampler::{Sampler, Stream};
+use crate::scene::{Interaction, Scene};
+
+/// Russian roulette starts after this many scattering events.
+const RR_DEPTH: u32 = 3;
+
+#[derive(Clone, Copy, Debug)]
+pub struct PathIntegrator {
+    pub max_depth: u32,
+}
+
+impl PathIntegrator {
+    /// Direct light at `it` by light sampling, MIS-weighted against BSDF sampling.
+    fn next_event<S: Sampler>(
+        &self,
+        scene: &Scene,
+        it: &Interaction,
+        bsdf: &SurfaceBsdf,
+        sampler: &mut S,
+        rays: &mut u64,
+    ) -> Rgb {
+        let u_light = sampler.next_1d();
+        let u = sampler.next_2d();
+        let Some((index, pmf)) = scene.light_sampler.sample(u_light) else {
+            return Rgb::ZERO;
+        };
+        let light = &scene.lights[index];
+        let p = it.surface.p;
+        let Some(ls) = light.sample_li(&scene.geometry, p, u) else {
+            return Rgb::ZERO;
+        };
+        let f = bsdf.eval(it.wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(bsdf.frame.n).abs();
+        if f.max_element() <= 0.0 {
+            return Rgb::ZERO;
+        }
+        *rays += 1;
+        let blocked = if ls.dist.is_finite() {
+            let (ray, t_max) = spawn_ray_to(p, it.surface.ng, ls.p);
+            scene.occluded(&ray, t_max)
+        } else {
+            scene.occluded(&spawn_ray(p, it.surface.ng, ls.wi), f32::INFINITY)
+        };
+        if blocked {
+            return Rgb::ZERO;
+        }
+        let light_pdf = pmf * ls.pdf;
+        if ls.delta {
+            return f * ls.li / light_pdf;
+        }
+        let w = power_heuristic(light_pdf, bsdf.pdf(it.wo, ls.wi));
+        f * ls.li * (w / light_pdf)
+    }
+}
+
+/// State carried from one vertex to the next for MIS of emission found by BSDF sampling.
+struct PrevVertex {
+    p: Vec3,
+    bsdf_pdf: f32,
+    specular: bool,
+}
+
+impl PixelEstimator for PathIntegrator {
+    fn li<S: Sampler>(&self, scene: &Scene, mut ray: Ray, sampler: &mut S, rays: &mut u64) -> Rgb {
+        let mut l = Rgb::ZERO;
+        let mut beta = Rgb::ONE;
+        let mut prev = PrevVertex {
+            p: ray.o,
+            bsdf_pdf: 0.0,
+            specular: true,
+        };
+        let mut depth = 0u32;
+        sampler.start_stream(Stream::Camera);
+        loop {
+            *rays += 1;
+            let Some(it) = scene.intersect(&ray) else {
+                for &i in &scene.infinite_lights {
+                    let light = &scene.lights[i as usize];
+                    let le = light.le(ray.d);
+                    let w = if prev.specular {
+                        1.0
+                    } else {
+                        power_heuristic(
+                            prev.bsdf_pdf,
+                            scene.light_sampler.pmf(i as usize) * light.pdf_li_dir(ray.d),
+                        )
+                    };
+                    l += beta * le * w;
+                }
+                break;
+            };
+            if let Some((index, light)) = scene.area_light(it.prim) {
+                let le = scene.emitted(&it);
+                if le.max_element() > 0.0 {
+                    let w = if prev.specular {
+                        1.0
+                    } else {
+                        let light_pdf = scene.light_sampler.pmf(index as usize)
+                            * light.pdf_li_area(&scene.geometry, prev.p, &it.surface);
+                        power_heuristic(prev.bsdf_pdf, light_pdf)
+                    };
+                    l += beta * le * w;
+                }
+            }
+            if depth == self.max_depth {
+                break;
+            }
+            depth += 1;
+            let bsdf = scene.bsdf(&it);
+            if !bsdf.is_delta() {
+                l += beta * self.next_event(scene, &it, &bsdf, sampler, rays);
+            }
+            let uc = sampler.next_1d();
+            let u = sampler.next_2d();
+            let Some(bs) = bsdf.sample(it.wo, uc, u, TransportMode::Radiance) else {
+                break;
+            };
+            beta *= bs.f * (bs.wi.dot(bsdf.frame.n).abs() / bs.pdf);
+            if !beta.is_finite() || beta.max_element() <= 0.0 {
+                break;
+            }
+            prev = PrevVertex {
+                p: it.surface.p,
+                bsdf_pdf: bs.pdf,
+                specular: bs.delta,
+            };
+            ray = spawn_ray(it.surface.p, it.surface.ng, bs.wi);
+            if depth > RR_DEPTH {
+                let q = (1.0 - beta.max_element()).max(0.0);
+                if sampler.next_1d() < q {
+                    break;
+                }
+                beta /= 1.0 - q;
+            }
+        }
+        l
+    }
+}
+
+impl Integrator for PathIntegrator {
+    fn name(&self) -> &'static str {
+        "path"
+    }
+
+    fn render(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> RenderOutput {
+        render_tiles(self, scene, settings, control)
+    }
+}

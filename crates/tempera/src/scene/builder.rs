@@ -1,0 +1,187 @@
+//! The scene-building API: loaders and built-in scenes add shapes, materials, lights and a
+//! camera; [`SceneBuilder::build`] validates them, builds the accelerator and the light tables.
+
+use super::{NO_LIGHT, Scene};
+use crate::accel::Bvh;
+use crate::camera::{Camera, CameraDesc};
+use crate::film::FilmDesc;
+use crate::geometry::{Geometry, Shape};
+use crate::light::{AreaLight, Light, LightSampler};
+use crate::material::Material;
+use crate::texture::Texture;
+
+/// Handle of a material added to a builder.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MaterialId(pub u32);
+
+/// Emission of an area light attached to a shape.
+#[derive(Clone, Debug)]
+pub struct AreaEmission {
+    pub radiance: Texture,
+    pub scale: f32,
+    pub two_sided: bool,
+}
+
+/// Render settings a scene suggests (pbrt's `Sampler`/`Integrator` directives).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderDefaults {
+    pub spp: u32,
+    pub max_depth: u32,
+}
+
+impl Default for RenderDefaults {
+    fn default() -> Self {
+        Self {
+            spp: 16,
+            max_depth: 5,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SceneError {
+    #[error("the scene has no camera")]
+    NoCamera,
+    #[error("shape {shape} uses material {material}, but only {count} materials exist")]
+    UnknownMaterial {
+        shape: usize,
+        material: u32,
+        count: usize,
+    },
+    #[error("film resolution {0}x{1} is empty")]
+    EmptyFilm(u32, u32),
+    #[error("invalid shape {shape}: {reason}")]
+    InvalidShape { shape: usize, reason: String },
+}
+
+#[derive(Default)]
+pub struct SceneBuilder {
+    shapes: Vec<Shape>,
+    shape_material: Vec<u32>,
+    shape_emission: Vec<Option<AreaEmission>>,
+    materials: Vec<Material>,
+    lights: Vec<Light>,
+    camera: Option<CameraDesc>,
+    film: FilmDesc,
+    defaults: RenderDefaults,
+}
+
+impl SceneBuilder {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn add_material(&mut self, material: Material) -> MaterialId {
+        self.materials.push(material);
+        MaterialId(self.materials.len() as u32 - 1)
+    }
+
+    /// Adds a shape with a material and, optionally, area emission.
+    pub fn add_shape(
+        &mut self,
+        shape: Shape,
+        material: MaterialId,
+        emission: Option<AreaEmission>,
+    ) {
+        self.shapes.push(shape);
+        self.shape_material.push(material.0);
+        self.shape_emission.push(emission);
+    }
+
+    /// Adds a non-area light (point, spot, distant, infinite).
+    pub fn add_light(&mut self, light: Light) {
+        self.lights.push(light);
+    }
+
+    pub fn set_camera(&mut self, camera: CameraDesc) {
+        self.camera = Some(camera);
+    }
+
+    pub fn set_film(&mut self, film: FilmDesc) {
+        self.film = film;
+    }
+
+    pub fn set_defaults(&mut self, defaults: RenderDefaults) {
+        self.defaults = defaults;
+    }
+
+    fn validate(&self) -> Result<(), SceneError> {
+        if self.film.width == 0 || self.film.height == 0 {
+            return Err(SceneError::EmptyFilm(self.film.width, self.film.height));
+        }
+        for (shape, &material) in self.shape_material.iter().enumerate() {
+            if material as usize >= self.materials.len() {
+                return Err(SceneError::UnknownMaterial {
+                    shape,
+                    material,
+                    count: self.materials.len(),
+                });
+            }
+        }
+        for (i, shape) in self.shapes.iter().enumerate() {
+            let bad = match shape {
+                Shape::Sphere(s) => {
+                    !(s.radius > 0.0 && s.radius.is_finite() && s.center.is_finite())
+                }
+                Shape::Disk(d) => !(d.radius > 0.0 && d.radius.is_finite() && d.center.is_finite()),
+                Shape::Mesh(m) => m.positions.iter().any(|p| !p.is_finite()),
+            };
+            if bad {
+                return Err(SceneError::InvalidShape {
+                    shape: i,
+                    reason: "non-finite or non-positive size".into(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    pub fn build(self) -> Result<Scene, SceneError> {
+        self.validate()?;
+        let camera_desc = self.camera.ok_or(SceneError::NoCamera)?;
+        let mut geometry = Geometry::new(self.shapes);
+        let accel = Bvh::build(&mut geometry);
+        let bounds = geometry.world_bounds();
+
+        let mut lights = self.lights;
+        let mut prim_light = vec![NO_LIGHT; geometry.prims.len()];
+        for (prim, r) in geometry.prims.iter().enumerate() {
+            if let Some(e) = &self.shape_emission[r.shape as usize] {
+                prim_light[prim] = lights.len() as u32;
+                lights.push(Light::Area(AreaLight {
+                    prim: prim as u32,
+                    radiance: e.radiance.clone(),
+                    scale: e.scale,
+                    two_sided: e.two_sided,
+                }));
+            }
+        }
+        let radius = if bounds.0.is_finite() {
+            0.5 * (bounds.1 - bounds.0).length()
+        } else {
+            1.0
+        };
+        let powers: Vec<f32> = lights.iter().map(|l| l.power(&geometry, radius)).collect();
+        let infinite_lights = lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.is_infinite())
+            .map(|(i, _)| i as u32)
+            .collect();
+        Ok(Scene {
+            geometry,
+            accel,
+            materials: self.materials,
+            shape_material: self.shape_material,
+            prim_light,
+            light_sampler: LightSampler::new(&powers),
+            lights,
+            infinite_lights,
+            camera: Camera::Perspective(camera_desc.build(self.film.width, self.film.height)),
+            camera_desc,
+            film: self.film,
+            defaults: self.defaults,
+            bounds,
+        })
+    }
+}
