@@ -1,6 +1,7 @@
 //! Statistical test helpers: a chi-square goodness-of-fit test of a direction sampler against
 //! its claimed density, binned over the sphere (after Mitsuba's `chi2` test suite).
 
+use crate::math::frame::Frame;
 use crate::math::rng::Pcg32;
 use crate::math::{Vec2, Vec3};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -20,68 +21,87 @@ pub struct Chi2Result {
     pub sampled_fraction: f64,
 }
 
-fn bin_of(w: Vec3) -> usize {
-    let theta = f64::from(w.z.clamp(-1.0, 1.0)).acos();
-    let mut phi = f64::from(w.y).atan2(f64::from(w.x));
-    if phi < 0.0 {
-        phi += 2.0 * PI;
-    }
-    let t = ((theta / PI * THETA_BINS as f64) as usize).min(THETA_BINS - 1);
-    let p = ((phi / (2.0 * PI) * PHI_BINS as f64) as usize).min(PHI_BINS - 1);
-    t * PHI_BINS + p
+/// How directions are binned: the whole sphere (bins uniform in θ), or a spherical cap
+/// `cos θ ≥ cos_min` around `frame.n` (bins uniform in cos θ, so a density that is discontinuous
+/// only at the cap's rim, such as a sphere light's cone, is integrated exactly).
+#[derive(Clone, Copy, Debug)]
+pub enum Binning {
+    Sphere,
+    Cap { frame: Frame, cos_min: f64 },
 }
 
-/// Integrates `pdf` over every (θ, φ) bin with a midpoint rule.
-fn bin_integrals(pdf: &dyn Fn(Vec3) -> f64) -> Vec<f64> {
-    let (dt, dp) = (PI / THETA_BINS as f64, 2.0 * PI / PHI_BINS as f64);
-    let mut out = vec![0.0; THETA_BINS * PHI_BINS];
-    for t in 0..THETA_BINS {
-        for p in 0..PHI_BINS {
-            let mut sum = 0.0;
-            for i in 0..SUB {
-                let theta = (t as f64 + (i as f64 + 0.5) / SUB as f64) * dt;
-                for j in 0..SUB {
-                    let phi = (p as f64 + (j as f64 + 0.5) / SUB as f64) * dp;
-                    let w = Vec3::new(
-                        (theta.sin() * phi.cos()) as f32,
-                        (theta.sin() * phi.sin()) as f32,
-                        theta.cos() as f32,
-                    );
-                    sum += pdf(w) * theta.sin();
-                }
+impl Binning {
+    /// Polar coordinate mapped to `[0, 1)` and azimuth in radians, or `None` outside a cap.
+    fn coords(&self, w: Vec3) -> Option<(f64, f64)> {
+        let (w, a) = match *self {
+            Binning::Sphere => (w, f64::from(w.z.clamp(-1.0, 1.0)).acos() / PI),
+            Binning::Cap { frame, cos_min } => {
+                let l = frame.to_local(w);
+                (l, (1.0 - f64::from(l.z)) / (1.0 - cos_min))
             }
-            out[t * PHI_BINS + p] = sum * dt * dp / (SUB * SUB) as f64;
+        };
+        let mut phi = f64::from(w.y).atan2(f64::from(w.x));
+        if phi < 0.0 {
+            phi += 2.0 * PI;
         }
+        (a <= 1.0).then_some((a, phi))
     }
-    out
+
+    /// Direction at polar coordinate `a ∈ [0,1]`, azimuth `phi`, and the solid angle per unit
+    /// `(a, phi)`.
+    fn direction(&self, a: f64, phi: f64) -> (Vec3, f64) {
+        let (cos, jac) = match *self {
+            Binning::Sphere => ((a * PI).cos(), (a * PI).sin() * PI),
+            Binning::Cap { cos_min, .. } => (1.0 - a * (1.0 - cos_min), 1.0 - cos_min),
+        };
+        let sin = (1.0 - cos * cos).max(0.0).sqrt();
+        let l = Vec3::new(
+            (sin * phi.cos()) as f32,
+            (sin * phi.sin()) as f32,
+            cos as f32,
+        );
+        let w = match *self {
+            Binning::Sphere => l,
+            Binning::Cap { frame, .. } => frame.to_world(l),
+        };
+        (w, jac)
+    }
+
+    fn bin_of(&self, w: Vec3) -> Option<usize> {
+        let (a, phi) = self.coords(w)?;
+        let t = ((a * THETA_BINS as f64) as usize).min(THETA_BINS - 1);
+        let p = ((phi / (2.0 * PI) * PHI_BINS as f64) as usize).min(PHI_BINS - 1);
+        Some(t * PHI_BINS + p)
+    }
+
+    /// Integrates `pdf` over every bin with a midpoint rule.
+    fn integrals(&self, pdf: &dyn Fn(Vec3) -> f64) -> Vec<f64> {
+        let (da, dp) = (1.0 / THETA_BINS as f64, 2.0 * PI / PHI_BINS as f64);
+        let mut out = vec![0.0; THETA_BINS * PHI_BINS];
+        for t in 0..THETA_BINS {
+            for p in 0..PHI_BINS {
+                let mut sum = 0.0;
+                for i in 0..SUB {
+                    let a = (t as f64 + (i as f64 + 0.5) / SUB as f64) * da;
+                    for j in 0..SUB {
+                        let phi = (p as f64 + (j as f64 + 0.5) / SUB as f64) * dp;
+                        let (w, jac) = self.direction(a, phi);
+                        sum += pdf(w) * jac;
+                    }
+                }
+                out[t * PHI_BINS + p] = sum * da * dp / (SUB * SUB) as f64;
+            }
+        }
+        out
+    }
 }
 
-/// Draws `n` samples and tests their histogram against the integral of `pdf` per bin. The test
-/// is conditional on the number of produced directions, so samplers that sometimes fail (or
-/// produce delta lobes, which the caller filters out) are handled.
-pub fn chi2_sphere(
-    n: usize,
-    seed: u64,
-    mut sample: impl FnMut(Vec2, f32) -> Option<Vec3>,
-    pdf: impl Fn(Vec3) -> f64,
-) -> Chi2Result {
-    let mut rng = Pcg32::new(seed, 0x5eed);
-    let mut counts = vec![0u64; THETA_BINS * PHI_BINS];
-    let mut produced = 0u64;
-    for _ in 0..n {
-        let u = Vec2::new(rng.next_f32(), rng.next_f32());
-        let uc = rng.next_f32();
-        if let Some(w) = sample(u, uc) {
-            counts[bin_of(w)] += 1;
-            produced += 1;
-        }
-    }
-    let integrals = bin_integrals(&pdf);
-    let total: f64 = integrals.iter().sum();
+/// p-value of Pearson's chi-square test of observed counts against expected counts; bins
+/// expecting fewer than five are pooled.
+pub fn chi2_p_value(observed: &[u64], expected: &[f64]) -> f64 {
     let (mut chi2, mut dof) = (0.0, 0i64);
     let (mut pool_obs, mut pool_exp) = (0.0, 0.0);
-    for (obs, integral) in counts.iter().zip(&integrals) {
-        let exp = produced as f64 * integral / total;
+    for (obs, &exp) in observed.iter().zip(expected) {
         if exp < 5.0 {
             pool_obs += *obs as f64;
             pool_exp += exp;
@@ -95,13 +115,56 @@ pub fn chi2_sphere(
         dof += 1;
     } else if pool_obs > 20.0 {
         // Many samples where the density claims (almost) nothing: a certain failure.
-        chi2 = f64::INFINITY;
+        return 0.0;
     }
     let dist = ChiSquared::new((dof - 1).max(1) as f64).expect("valid degrees of freedom");
-    let p_value = if chi2.is_finite() {
-        1.0 - dist.cdf(chi2)
-    } else {
+    1.0 - dist.cdf(chi2)
+}
+
+/// Draws `n` samples and tests their histogram against the integral of `pdf` per bin. The test
+/// is conditional on the number of produced directions, so samplers that sometimes fail (or
+/// produce delta lobes, which the caller filters out) are handled.
+pub fn chi2_sphere(
+    n: usize,
+    seed: u64,
+    sample: impl FnMut(Vec2, f32) -> Option<Vec3>,
+    pdf: impl Fn(Vec3) -> f64,
+) -> Chi2Result {
+    chi2_directions(Binning::Sphere, n, seed, sample, pdf)
+}
+
+/// [`chi2_sphere`] with a chosen binning; samples outside a cap count as a failure.
+pub fn chi2_directions(
+    binning: Binning,
+    n: usize,
+    seed: u64,
+    mut sample: impl FnMut(Vec2, f32) -> Option<Vec3>,
+    pdf: impl Fn(Vec3) -> f64,
+) -> Chi2Result {
+    let mut rng = Pcg32::new(seed, 0x5eed);
+    let mut counts = vec![0u64; THETA_BINS * PHI_BINS];
+    let (mut produced, mut outside) = (0u64, 0u64);
+    for _ in 0..n {
+        let u = Vec2::new(rng.next_f32(), rng.next_f32());
+        let uc = rng.next_f32();
+        if let Some(w) = sample(u, uc) {
+            match binning.bin_of(w) {
+                Some(bin) => counts[bin] += 1,
+                None => outside += 1,
+            }
+            produced += 1;
+        }
+    }
+    let integrals = binning.integrals(&pdf);
+    let total: f64 = integrals.iter().sum();
+    let expected: Vec<f64> = integrals
+        .iter()
+        .map(|i| produced as f64 * i / total)
+        .collect();
+    let p_value = if outside > 0 {
         0.0
+    } else {
+        chi2_p_value(&counts, &expected)
     };
     Chi2Result {
         p_value,

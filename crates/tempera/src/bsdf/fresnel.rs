@@ -189,6 +189,6 @@ mod tests {
         assert_eq!(eta, 1.5);
         assert!((wt.length() - 1.0).abs() < 1e-5);
         assert!((0.6f32 - 1.5 * wt.x.abs()).abs() < 1e-5 && wt.z < 0.0);
-        assert!(refract(Vec3::new(0.9, 0.0, -0.43588989).normalize(), Vec3::Z, 1.5).is_none());
+        assert!(refract(Vec3::new(0.9, 0.0, -0.435_889_9).normalize(), Vec3::Z, 1.5).is_none());
     }
 }

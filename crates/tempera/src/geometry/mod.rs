@@ -160,7 +160,7 @@ impl Geometry {
         let w = area_sample.point.p - reference;
         let d2 = w.length_squared();
         let cos = area_sample.point.ng.dot(w).abs() / d2.sqrt();
-        if d2 == 0.0 || !(cos > 0.0) {
+        if d2 == 0.0 || cos.is_nan() || cos <= 0.0 {
             return None;
         }
         Some(ShapeSample {
@@ -178,7 +178,7 @@ impl Geometry {
         let w = hit.p - reference;
         let d2 = w.length_squared();
         let cos = hit.ng.dot(w).abs() / d2.sqrt();
-        if !(cos > 0.0) {
+        if cos.is_nan() || cos <= 0.0 {
             return 0.0;
         }
         d2 / (cos * self.area(i))

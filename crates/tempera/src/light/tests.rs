@@ -4,7 +4,8 @@
 use super::*;
 use crate::geometry::{Disk, Geometry, Ray, RayShear, Shape, Sphere, TriangleMesh};
 use crate::math::Mat3;
-use crate::testing::chi2_sphere;
+use crate::math::frame::Frame;
+use crate::testing::{Binning, chi2_directions, chi2_p_value, chi2_sphere};
 use crate::texture::Image;
 use std::sync::Arc;
 
@@ -40,41 +41,207 @@ fn emitter_geometry() -> Geometry {
     ])
 }
 
+/// Solid-angle density of `light` towards direction `w` from `reference` (0 on a miss).
+fn area_pdf(geometry: &Geometry, light: &AreaLight, reference: Vec3, w: Vec3) -> f64 {
+    let ray = Ray::new(reference, w);
+    let prim = light.prim;
+    match geometry.intersect_prim(prim, &ray, &RayShear::new(&ray), f32::INFINITY) {
+        Some((t, b)) => {
+            let hit = geometry.surface(&ray, &crate::geometry::PrimHit { prim, t, b });
+            f64::from(light.pdf_li(geometry, reference, &hit))
+        }
+        None => 0.0,
+    }
+}
+
+fn light_on(prim: u32) -> AreaLight {
+    AreaLight {
+        prim,
+        radiance: Rgb::ONE.into(),
+        scale: 1.0,
+        two_sided: true,
+    }
+}
+
+const REFERENCE: Vec3 = Vec3::new(0.1, -0.2, 0.05);
+
 #[test]
-fn area_light_sampling_matches_pdf() {
+fn sphere_light_cone_sampling_matches_pdf() {
     let geometry = emitter_geometry();
-    let reference = Vec3::new(0.1, -0.2, 0.05);
-    for prim in 0..geometry.prims.len() as u32 {
-        let light = AreaLight {
-            prim,
-            radiance: Rgb::ONE.into(),
-            scale: 1.0,
-            two_sided: true,
+    let light = light_on(1);
+    let (center, radius) = (Vec3::new(0.5, 0.3, 2.0), 0.7f64);
+    let axis = (center - REFERENCE).normalize();
+    let sin2 = radius * radius / f64::from((center - REFERENCE).length_squared());
+    let binning = Binning::Cap {
+        frame: Frame::from_z(axis),
+        cos_min: (1.0 - sin2).sqrt(),
+    };
+    let r = chi2_directions(
+        binning,
+        300_000,
+        1,
+        |u, _| light.sample_li(&geometry, REFERENCE, u).map(|s| s.wi),
+        |w| area_pdf(&geometry, &light, REFERENCE, w),
+    );
+    assert!(r.p_value > 1e-4, "sphere cone: {r:?}");
+    assert!((r.pdf_integral - 1.0).abs() < 0.01, "sphere cone: {r:?}");
+}
+
+#[test]
+fn sphere_light_sampled_from_inside_matches_pdf() {
+    let geometry = emitter_geometry();
+    let light = light_on(3);
+    let r = chi2_sphere(
+        300_000,
+        2,
+        |u, _| light.sample_li(&geometry, REFERENCE, u).map(|s| s.wi),
+        |w| area_pdf(&geometry, &light, REFERENCE, w),
+    );
+    assert!(
+        r.p_value > 1e-4 && (r.pdf_integral - 1.0).abs() < 0.01,
+        "inside sphere: {r:?}"
+    );
+}
+
+/// Samples points on `light` and bins them in a parametrisation where uniform area sampling
+/// is uniform; returns the chi-square p-value.
+fn area_domain_p_value(
+    geometry: &Geometry,
+    light: &AreaLight,
+    to_unit: impl Fn(Vec3) -> Vec2,
+    expected: &[f64],
+    grid: usize,
+) -> f64 {
+    let mut rng = crate::math::rng::Pcg32::new(u64::from(light.prim), 9);
+    let mut counts = vec![0u64; grid * grid];
+    let n = expected.iter().sum::<f64>().round() as usize;
+    for _ in 0..n {
+        let s = light
+            .sample_li(
+                geometry,
+                REFERENCE,
+                Vec2::new(rng.next_f32(), rng.next_f32()),
+            )
+            .unwrap();
+        let q = to_unit(s.p);
+        let (i, j) = (
+            ((q.x * grid as f32) as usize).min(grid - 1),
+            ((q.y * grid as f32) as usize).min(grid - 1),
+        );
+        counts[j * grid + i] += 1;
+    }
+    chi2_p_value(&counts, expected)
+}
+
+#[test]
+fn triangle_and_disk_lights_sample_area_uniformly() {
+    let geometry = emitter_geometry();
+    let (n, grid) = (200_000.0, 16);
+    // Triangle: barycentrics (b1, b2) are uniform on the lower-left half of the unit square.
+    let [p0, p1, p2] = match &geometry.shapes[0] {
+        Shape::Mesh(m) => m.vertices(0),
+        _ => unreachable!(),
+    };
+    let barycentric = |p: Vec3| {
+        let (v0, v1, v2) = (p1 - p0, p2 - p0, p - p0);
+        let (d00, d01, d11, d20, d21) =
+            (v0.dot(v0), v0.dot(v1), v1.dot(v1), v2.dot(v0), v2.dot(v1));
+        let denom = d00 * d11 - d01 * d01;
+        Vec2::new(
+            (d11 * d20 - d01 * d21) / denom,
+            (d00 * d21 - d01 * d20) / denom,
+        )
+    };
+    let expected: Vec<f64> = (0..grid * grid)
+        .map(|k| {
+            let (i, j) = (k % grid, k / grid);
+            let cell = 1.0 / (grid * grid) as f64;
+            match (i + j + 1).cmp(&grid) {
+                std::cmp::Ordering::Less => n * cell * 2.0,
+                std::cmp::Ordering::Equal => n * cell,
+                std::cmp::Ordering::Greater => 0.0,
+            }
+        })
+        .collect();
+    let p = area_domain_p_value(&geometry, &light_on(0), barycentric, &expected, grid);
+    assert!(p > 1e-4, "triangle area sampling: p = {p:e}");
+
+    // Disk: (r/R)² and φ/2π are uniform.
+    let Shape::Disk(disk) = geometry.shapes[2] else {
+        unreachable!()
+    };
+    let polar = |p: Vec3| {
+        let l = disk.frame.to_local(p - disk.center);
+        let phi = crate::math::warp::spherical_phi(Vec3::new(l.x, l.y, 0.0));
+        Vec2::new(
+            (l.x * l.x + l.y * l.y) / (disk.radius * disk.radius),
+            phi / (2.0 * std::f32::consts::PI),
+        )
+    };
+    let expected = vec![n / (grid * grid) as f64; grid * grid];
+    let p = area_domain_p_value(&geometry, &light_on(2), polar, &expected, grid);
+    assert!(p > 1e-4, "disk area sampling: p = {p:e}");
+}
+
+#[test]
+fn area_to_solid_angle_conversion_recovers_the_subtended_solid_angle() {
+    // E[1 / pdf] over samples is the solid angle the light subtends.
+    let geometry = emitter_geometry();
+    let expected_triangle = {
+        let [a, b, c] = match &geometry.shapes[0] {
+            Shape::Mesh(m) => m.vertices(0).map(|v| (v - REFERENCE).as_dvec3()),
+            _ => unreachable!(),
         };
-        let r = chi2_sphere(
-            300_000,
-            u64::from(prim) + 10,
-            |u, _| light.sample_li(&geometry, reference, u).map(|s| s.wi),
-            |w| {
-                let ray = Ray::new(reference, w);
-                match geometry.intersect_prim(prim, &ray, &RayShear::new(&ray), f32::INFINITY) {
-                    Some((t, b)) => {
-                        let hit = geometry.surface(&ray, &crate::geometry::PrimHit { prim, t, b });
-                        f64::from(light.pdf_li(&geometry, reference, &hit))
-                    }
-                    None => 0.0,
-                }
-            },
-        );
+        let (la, lb, lc) = (a.length(), b.length(), c.length());
+        let num = a.dot(b.cross(c)).abs();
+        let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+        2.0 * num.atan2(den)
+    };
+    let expected_disk = {
+        let Shape::Disk(d) = geometry.shapes[2] else {
+            unreachable!()
+        };
+        let (nr, np) = (400, 400);
+        let mut sum = 0.0f64;
+        for i in 0..nr {
+            let r = (f64::from(i) + 0.5) / f64::from(nr) * f64::from(d.radius);
+            for j in 0..np {
+                let phi = (f64::from(j) + 0.5) / f64::from(np) * std::f64::consts::TAU;
+                let p = d.center.as_dvec3()
+                    + (d.frame.s.as_dvec3() * phi.cos() + d.frame.t.as_dvec3() * phi.sin()) * r;
+                let w = p - REFERENCE.as_dvec3();
+                sum += d.frame.n.as_dvec3().dot(w).abs() / w.length().powi(3) * r;
+            }
+        }
+        sum * f64::from(d.radius) / f64::from(nr) * std::f64::consts::TAU / f64::from(np)
+    };
+    let sphere_cap = {
+        let sin2 = 0.49 / f64::from((Vec3::new(0.5, 0.3, 2.0) - REFERENCE).length_squared());
+        std::f64::consts::TAU * (1.0 - (1.0 - sin2).sqrt())
+    };
+    for (prim, want) in [(0, expected_triangle), (1, sphere_cap), (2, expected_disk)] {
+        let light = light_on(prim);
+        let mut rng = crate::math::rng::Pcg32::new(3, u64::from(prim));
+        let n = 200_000;
+        let mut sum = 0.0f64;
+        for _ in 0..n {
+            let s = light
+                .sample_li(
+                    &geometry,
+                    REFERENCE,
+                    Vec2::new(rng.next_f32(), rng.next_f32()),
+                )
+                .unwrap();
+            assert!(
+                (f64::from(s.pdf) - area_pdf(&geometry, &light, REFERENCE, s.wi)).abs()
+                    < 1e-3 * f64::from(s.pdf)
+            );
+            sum += 1.0 / f64::from(s.pdf);
+        }
+        let got = sum / f64::from(n);
         assert!(
-            r.p_value > 1e-4,
-            "primitive {prim}: chi-square p = {:e}",
-            r.p_value
-        );
-        assert!(
-            (r.pdf_integral - 1.0).abs() < 0.01,
-            "primitive {prim}: ∫pdf = {}",
-            r.pdf_integral
+            (got - want).abs() < 0.01 * want,
+            "primitive {prim}: solid angle {got} vs {want}"
         );
     }
 }

@@ -26,7 +26,7 @@ impl Frame {
     pub fn from_normal_tangent(n: Vec3, dpdu: Vec3) -> Self {
         let s = dpdu - n * n.dot(dpdu);
         let len2 = s.length_squared();
-        if !(len2 > 1e-12) || !len2.is_finite() {
+        if len2.is_nan() || len2 <= 1e-12 || !len2.is_finite() {
             return Self::from_z(n);
         }
         let s = s / len2.sqrt();

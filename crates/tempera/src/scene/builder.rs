@@ -54,7 +54,7 @@ pub enum SceneError {
     InvalidShape { shape: usize, reason: String },
 }
 
-#[derive(Default)]
+#[derive(Debug, Default)]
 pub struct SceneBuilder {
     shapes: Vec<Shape>,
     shape_material: Vec<u32>,
