@@ -60,11 +60,14 @@ pub struct PrimHit {
     pub b: Vec3,
 }
 
-/// All shapes of a scene and the primitive table over them.
+/// All shapes of a scene and the primitive table over them. Triangle vertices are also cached
+/// per primitive, in primitive order, so that intersection tests read one contiguous record.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     pub shapes: Vec<Shape>,
     pub prims: Vec<PrimRef>,
+    /// Vertices of triangle primitives (`None` for analytic shapes), aligned with `prims`.
+    triangles: Vec<Option<[Vec3; 3]>>,
 }
 
 impl Geometry {
@@ -79,7 +82,24 @@ impl Geometry {
                 })
             })
             .collect();
-        Self { shapes, prims }
+        let mut g = Self {
+            shapes,
+            prims,
+            triangles: Vec::new(),
+        };
+        g.cache_triangles();
+        g
+    }
+
+    fn cache_triangles(&mut self) {
+        self.triangles = self
+            .prims
+            .iter()
+            .map(|r| match &self.shapes[r.shape as usize] {
+                Shape::Mesh(m) => Some(m.vertices(r.index)),
+                Shape::Sphere(_) | Shape::Disk(_) => None,
+            })
+            .collect();
     }
 
     /// Axis-aligned bounds of primitive `i`.
@@ -198,5 +218,6 @@ impl Geometry {
     /// Reorders the primitive table (the accelerator stores primitives in its own order).
     pub fn reorder(&mut self, order: &[u32]) {
         self.prims = order.iter().map(|&i| self.prims[i as usize]).collect();
+        self.cache_triangles();
     }
 }
