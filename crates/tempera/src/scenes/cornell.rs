@@ -63,15 +63,15 @@ pub(super) fn add_room(b: &mut SceneBuilder) {
     }
 }
 
-/// Adds a downward-facing square ceiling light of half-size `half` and radiance `radiance`.
-pub(super) fn add_ceiling_light(b: &mut SceneBuilder, half: f32, radiance: Rgb) {
+/// Adds a downward-facing square ceiling light of half-size `half`, centred at depth `z`.
+pub(super) fn add_ceiling_light(b: &mut SceneBuilder, half: f32, z: f32, radiance: Rgb) {
     let black = b.add_material(Material::diffuse(Rgb::ZERO));
     let y = 1.999;
     let light = quad(
-        Vec3::new(-half, y, -half),
-        Vec3::new(half, y, -half),
-        Vec3::new(half, y, half),
-        Vec3::new(-half, y, half),
+        Vec3::new(-half, y, z - half),
+        Vec3::new(half, y, z - half),
+        Vec3::new(half, y, z + half),
+        Vec3::new(-half, y, z + half),
     );
     b.add_shape(
         light,
@@ -97,7 +97,7 @@ pub(super) fn room_camera(fov: f32) -> CameraDesc {
 pub fn cornell_box(width: u32, height: u32) -> SceneBuilder {
     let mut b = SceneBuilder::new();
     add_room(&mut b);
-    add_ceiling_light(&mut b, 0.25, Rgb::new(17.0, 12.0, 4.0));
+    add_ceiling_light(&mut b, 0.25, 0.0, Rgb::new(17.0, 12.0, 4.0));
     let white = b.add_material(Material::diffuse(Rgb::splat(0.73)));
     b.add_shape(
         Shape::Sphere(Sphere {

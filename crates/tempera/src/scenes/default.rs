@@ -32,7 +32,7 @@ fn conductor((eta, k): (Rgb, Rgb), alpha: f32) -> Material {
 pub fn default_scene() -> SceneBuilder {
     let mut b = SceneBuilder::new();
     add_room(&mut b);
-    add_ceiling_light(&mut b, 0.15, Rgb::new(17.0, 12.0, 4.0) * 2.5);
+    add_ceiling_light(&mut b, 0.15, -0.3, Rgb::new(17.0, 12.0, 4.0) * 2.5);
 
     let glass = b.add_material(Material::Dielectric(DielectricMaterial {
         eta: 1.5,
@@ -54,8 +54,8 @@ pub fn default_scene() -> SceneBuilder {
     b.add_shape(Shape::Sphere(gold_sphere), gold, None);
 
     let mirror = b.add_material(conductor(ALUMINIUM, 0.02));
-    let normal = Vec3::new(-0.45, 0.0, 1.0).normalize();
-    let panel = oriented_quad(Vec3::new(0.55, 0.75, -0.8), normal, Vec3::Y, 0.55, 0.35);
+    let normal = Vec3::new(0.28, -0.21, 0.94).normalize();
+    let panel = oriented_quad(Vec3::new(-0.45, 0.9, -0.9), normal, Vec3::X, 0.4, 0.35);
     b.add_shape(panel, mirror, None);
 
     b.set_camera(room_camera(38.0));
