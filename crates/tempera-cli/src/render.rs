@@ -24,7 +24,7 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
     /// Render for this many seconds instead of a fixed sample count.
-    #[arg(long, value_parser = parse_seconds)]
+    #[arg(long, value_parser = parse_seconds, allow_hyphen_values = true)]
     pub time: Option<f64>,
     /// Seed of every random number of the render.
     #[arg(long, default_value_t = 0)]
