@@ -205,6 +205,57 @@ mod tests {
     }
 
     #[test]
+    fn eight_bit_textures_decode_to_linear() {
+        let dir = std::env::temp_dir().join(format!("tempera-ldr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let raw = image::RgbImage::from_fn(8, 8, |x, _| {
+            if x < 4 {
+                image::Rgb([128, 128, 128])
+            } else {
+                image::Rgb([255, 0, 64])
+            }
+        });
+        for name in ["t.tga", "t.jpg", "t.png"] {
+            let path = dir.join(name);
+            raw.save(&path).unwrap();
+            let srgb = read_image(&path, ColorEncoding::Srgb).unwrap();
+            let linear = read_image(&path, ColorEncoding::Linear).unwrap();
+            // JPEG is lossy: compare the flat left half's centre with a tolerance.
+            let tol = if name.ends_with("jpg") { 0.02 } else { 1e-4 };
+            assert!(
+                (srgb.get(1, 4).x - 0.2158).abs() < tol,
+                "{name}: sRGB 128 decodes to 0.2158, got {}",
+                srgb.get(1, 4).x
+            );
+            assert!(
+                (linear.get(1, 4).x - 128.0 / 255.0).abs() < tol,
+                "{name}: linear keeps the code value"
+            );
+            assert!((srgb.get(6, 4).x - 1.0).abs() < tol * 5.0, "{name}");
+        }
+        let gamma = ColorEncoding::Gamma(2.2).decode(0.5);
+        assert!((gamma - 0.5f32.powf(2.2)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn malformed_pfm_is_an_error_naming_the_file() {
+        let dir = std::env::temp_dir().join(format!("tempera-badpfm-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (name, bytes) in [
+            ("a.pfm", &b"P6\n1 1\n-1\n"[..]),
+            ("b.pfm", b"PF\n2 2\n-1.0\n\0\0"),
+            ("c.pfm", b"PF\n-2 x\n"),
+        ] {
+            let path = dir.join(name);
+            std::fs::write(&path, bytes).unwrap();
+            let err = read_image(&path, ColorEncoding::Linear)
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(name), "{err}");
+        }
+    }
+
+    #[test]
     fn errors_name_the_file() {
         let err = read_image(Path::new("/nonexistent/x.exr"), ColorEncoding::Linear).unwrap_err();
         assert!(err.to_string().contains("/nonexistent/x.exr"));

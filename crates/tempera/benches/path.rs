@@ -29,7 +29,7 @@ fn render(threads: usize) {
         seed: 1,
         threads,
     };
-    let out = PathIntegrator { max_depth: 8 }.render(&SCENE, &settings, &control);
+    let out = PathIntegrator::new(8).render(&SCENE, &settings, &control);
     divan::black_box(out.image);
 }
 

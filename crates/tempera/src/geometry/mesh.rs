@@ -167,3 +167,75 @@ impl TriangleMesh {
         (self.surface(tri, b), 1.0 / self.area(tri))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> TriangleMesh {
+        let p = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(2.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
+        let uv = vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ];
+        TriangleMesh::new(p, vec![[0, 1, 2], [0, 2, 3]], None, Some(uv)).unwrap()
+    }
+
+    #[test]
+    fn surface_interpolates_uvs_and_orients_normals() {
+        let mut m = quad();
+        let s = m.surface(0, Vec3::new(0.25, 0.5, 0.25));
+        assert!((s.p - Vec3::new(1.5, 0.25, 0.0)).length() < 1e-6);
+        assert!((s.uv - Vec2::new(0.75, 0.25)).length() < 1e-6);
+        assert_eq!(s.ng, Vec3::Z, "counter-clockwise faces +z");
+        assert!(
+            (s.dpdu - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-5,
+            "dp/du follows the uv layout"
+        );
+        m.reverse_orientation = true;
+        assert_eq!(m.surface(0, Vec3::splat(1.0 / 3.0)).ng, -Vec3::Z);
+        // Shading normals win over the winding: the geometric normal is flipped towards them.
+        let mut n = quad();
+        n.normals = Some(vec![Vec3::new(0.0, 0.6, -0.8); 4]);
+        let s = n.surface(1, Vec3::splat(1.0 / 3.0));
+        assert_eq!(s.ng, -Vec3::Z);
+        assert!((s.ns - Vec3::new(0.0, 0.6, -0.8)).length() < 1e-6);
+    }
+
+    #[test]
+    fn mirroring_transforms_flip_orientation_and_area_sampling_is_uniform_density() {
+        let mut m = quad();
+        m.transform(&Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)));
+        assert_eq!(
+            m.surface(0, Vec3::splat(1.0 / 3.0)).ng,
+            Vec3::Z,
+            "the mirrored winding is compensated"
+        );
+        assert!((m.area(0) - 1.0).abs() < 1e-6);
+        let (s, pdf) = m.sample(1, Vec2::new(0.3, 0.8));
+        assert_eq!(pdf, 1.0);
+        assert!(s.p.x <= 0.0 && s.p.x >= -2.0 && s.p.y >= 0.0 && s.p.y <= 1.0);
+    }
+
+    #[test]
+    fn invalid_meshes_are_rejected() {
+        let p = vec![Vec3::ZERO; 3];
+        assert_eq!(
+            TriangleMesh::new(p.clone(), vec![[0, 1, 3]], None, None).unwrap_err(),
+            MeshError::IndexOutOfRange { index: 3, count: 3 }
+        );
+        assert!(
+            TriangleMesh::new(p.clone(), vec![[0, 1, 2]], Some(vec![Vec3::Z; 2]), None).is_err()
+        );
+        assert!(
+            TriangleMesh::new(vec![Vec3::splat(f32::NAN); 3], vec![[0, 1, 2]], None, None).is_err()
+        );
+    }
+}

@@ -75,7 +75,7 @@ pub const INTEGRATORS: &[&str] = &["path"];
 /// of scattering events).
 pub fn create(name: &str, max_depth: u32) -> Option<Box<dyn Integrator>> {
     match name {
-        "path" => Some(Box::new(PathIntegrator { max_depth })),
+        "path" => Some(Box::new(PathIntegrator::new(max_depth))),
         _ => None,
     }
 }

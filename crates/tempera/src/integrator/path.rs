@@ -16,11 +16,23 @@ const RR_DEPTH: u32 = 3;
 #[derive(Clone, Copy, Debug)]
 pub struct PathIntegrator {
     pub max_depth: u32,
+    /// Sample lights at every vertex (next-event estimation) and weight by MIS. Without it, only
+    /// BSDF sampling finds light: an independent estimator used to validate the MIS weights.
+    pub next_event: bool,
+}
+
+impl PathIntegrator {
+    pub fn new(max_depth: u32) -> Self {
+        Self {
+            max_depth,
+            next_event: true,
+        }
+    }
 }
 
 impl PathIntegrator {
     /// Direct light at `it` by light sampling, MIS-weighted against BSDF sampling.
-    fn next_event<S: Sampler>(
+    fn sample_light<S: Sampler>(
         &self,
         scene: &Scene,
         it: &Interaction,
@@ -100,7 +112,7 @@ impl PixelEstimator for PathIntegrator {
             if let Some((index, light)) = scene.area_light(it.prim) {
                 let le = scene.emitted(&it);
                 if le.max_element() > 0.0 {
-                    let w = if prev.specular {
+                    let w = if prev.specular || !self.next_event {
                         1.0
                     } else {
                         let light_pdf = scene.light_sampler.pmf(index as usize)
@@ -115,8 +127,8 @@ impl PixelEstimator for PathIntegrator {
             }
             depth += 1;
             let bsdf = scene.bsdf(&it);
-            if !bsdf.is_delta() {
-                l += beta * self.next_event(scene, &it, &bsdf, sampler, rays);
+            if self.next_event && !bsdf.is_delta() {
+                l += beta * self.sample_light(scene, &it, &bsdf, sampler, rays);
             }
             let uc = sampler.next_1d();
             let u = sampler.next_2d();

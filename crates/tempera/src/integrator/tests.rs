@@ -99,9 +99,9 @@ fn check_furnace(integrator: &dyn Integrator, spp: u32) {
 
 #[test]
 fn path_tracer_passes_the_white_furnace() {
-    check_furnace(&PathIntegrator { max_depth: 8 }, 16);
+    check_furnace(&PathIntegrator::new(8), 16);
     // One scattering event suffices for a convex sphere: direct light only must agree.
-    check_furnace(&PathIntegrator { max_depth: 1 }, 16);
+    check_furnace(&PathIntegrator::new(1), 16);
 }
 
 use crate::math::Rgb;
@@ -109,13 +109,7 @@ use crate::math::Rgb;
 #[test]
 fn maxdepth_zero_shows_only_emitters() {
     let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
-    let out = render_with(
-        &scene,
-        &PathIntegrator { max_depth: 0 },
-        Budget::Samples(4),
-        3,
-        0,
-    );
+    let out = render_with(&scene, &PathIntegrator::new(0), Budget::Samples(4), 3, 0);
     let lit: Vec<usize> = (0..out.image.pixels.len())
         .filter(|&i| out.image.pixels[i].max_element() > 0.0)
         .collect();
@@ -132,13 +126,7 @@ fn maxdepth_zero_shows_only_emitters() {
     // a lit wall or floor), the floor only one.
     let ceiling = |img: &crate::texture::Image| img.get(3, 1).max_element();
     let floor = |img: &crate::texture::Image| img.get(16, 30).max_element();
-    let one = render_with(
-        &scene,
-        &PathIntegrator { max_depth: 1 },
-        Budget::Samples(16),
-        3,
-        0,
-    );
+    let one = render_with(&scene, &PathIntegrator::new(1), Budget::Samples(16), 3, 0);
     assert_eq!(
         ceiling(&one.image),
         0.0,
@@ -148,13 +136,7 @@ fn maxdepth_zero_shows_only_emitters() {
         floor(&one.image) > 0.0,
         "maxdepth 1: direct light on the floor"
     );
-    let two = render_with(
-        &scene,
-        &PathIntegrator { max_depth: 2 },
-        Budget::Samples(16),
-        3,
-        0,
-    );
+    let two = render_with(&scene, &PathIntegrator::new(2), Budget::Samples(16), 3, 0);
     assert!(
         ceiling(&two.image) > 0.0,
         "maxdepth 2: indirect light on the ceiling"
@@ -166,7 +148,7 @@ fn same_seed_is_bit_identical_at_any_thread_count() {
     let scene = crate::scenes::default_scene();
     let mut scene = scene.build().unwrap();
     scene.set_resolution(40, 30);
-    let integrator = PathIntegrator { max_depth: 6 };
+    let integrator = PathIntegrator::new(6);
     let a = render_with(&scene, &integrator, Budget::Samples(6), 11, 1);
     let b = render_with(&scene, &integrator, Budget::Samples(6), 11, 2);
     let c = render_with(&scene, &integrator, Budget::Samples(6), 11, 3);
@@ -182,7 +164,7 @@ fn same_seed_is_bit_identical_at_any_thread_count() {
 #[test]
 fn time_budget_renders_every_pixel_and_cancellation_stops_early() {
     let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
-    let integrator = PathIntegrator { max_depth: 5 };
+    let integrator = PathIntegrator::new(5);
     let out = render_with(
         &scene,
         &integrator,
@@ -232,4 +214,43 @@ fn time_budget_renders_every_pixel_and_cancellation_stops_early() {
             > 1000,
         "what was rendered is kept"
     );
+}
+
+/// Per-block means of an image and their standard errors (pixels as independent estimates).
+fn block_stats(img: &crate::texture::Image, block: usize) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for by in (0..img.height).step_by(block) {
+        for bx in (0..img.width).step_by(block) {
+            let mut values = Vec::new();
+            for y in by..(by + block).min(img.height) {
+                for x in bx..(bx + block).min(img.width) {
+                    values.push(f64::from(crate::math::luminance(img.get(x, y))));
+                }
+            }
+            out.push(mean_and_se(&values));
+        }
+    }
+    out
+}
+
+#[test]
+fn next_event_estimation_agrees_with_bsdf_sampling_on_a_cornell_box() {
+    let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
+    let mis = render_with(&scene, &PathIntegrator::new(5), Budget::Samples(128), 5, 0);
+    let bsdf_only = PathIntegrator {
+        max_depth: 5,
+        next_event: false,
+    };
+    let plain = render_with(&scene, &bsdf_only, Budget::Samples(512), 6, 0);
+    let (a, b) = (block_stats(&mis.image, 8), block_stats(&plain.image, 8));
+    for (i, ((ma, sa), (mb, sb))) in a.iter().zip(&b).enumerate() {
+        let se = (sa * sa + sb * sb).sqrt();
+        assert!(
+            (ma - mb).abs() < 4.5 * se + 1e-3,
+            "block {i}: MIS {ma} vs BSDF-only {mb} (se {se})"
+        );
+    }
+    let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
+    let (ma, mb) = (mean(&a), mean(&b));
+    assert!((ma / mb - 1.0).abs() < 0.03, "image means {ma} vs {mb}");
 }

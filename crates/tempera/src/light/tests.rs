@@ -336,3 +336,52 @@ fn spotlight_falls_off_smoothly() {
     let mid = Vec3::new(25f32.to_radians().sin(), 0.0, 25f32.to_radians().cos());
     assert!(spot.i(mid).x > 0.0 && spot.i(mid).x < 1.0);
 }
+
+#[test]
+fn textured_area_light_radiance_follows_uv() {
+    use crate::texture::{Checkerboard, Texture, UvMapping};
+    let geometry = emitter_geometry();
+    let radiance = Texture::Checkerboard(Box::new(Checkerboard {
+        even: Rgb::new(4.0, 0.0, 0.0).into(),
+        odd: Rgb::new(0.0, 0.0, 2.0).into(),
+        mapping: UvMapping {
+            su: 2.0,
+            sv: 1.0,
+            du: 0.0,
+            dv: 0.0,
+        },
+    }));
+    let light = AreaLight {
+        prim: 2,
+        radiance,
+        scale: 0.5,
+        two_sided: true,
+    };
+    let mut seen = [false; 2];
+    let mut rng = crate::math::rng::Pcg32::new(1, 2);
+    for _ in 0..200 {
+        let s = light
+            .sample_li(
+                &geometry,
+                REFERENCE,
+                Vec2::new(rng.next_f32(), rng.next_f32()),
+            )
+            .unwrap();
+        let Shape::Disk(d) = geometry.shapes[2] else {
+            unreachable!()
+        };
+        let u = d.surface(s.p).uv.x;
+        let want = if u < 0.5 {
+            Rgb::new(2.0, 0.0, 0.0)
+        } else {
+            Rgb::new(0.0, 0.0, 1.0)
+        };
+        assert_eq!(s.li, want);
+        seen[usize::from(u >= 0.5)] = true;
+    }
+    assert!(seen[0] && seen[1]);
+    // Power uses the texture's average: (4 + 2)/2 channels' luminance, times area, π and two sides.
+    let avg = crate::math::luminance(Rgb::new(2.0, 0.0, 1.0)) * 0.5;
+    let want = avg * geometry.area(2) * std::f32::consts::PI * 2.0;
+    assert!((light.power(&geometry) - want).abs() < 1e-4 * want);
+}
