@@ -1,16 +1,14 @@
 //! The `tempera` command-line renderer: one module per subcommand.
 
+mod info;
 mod render;
+mod scene;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(
-    name = "tempera",
-    version,
-    about = "Physically based rendering with tempered Markov-chain light transport"
-)]
+#[command(name = "tempera", version, about = "Physically based rendering with tempered Markov-chain light transport")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -20,12 +18,15 @@ struct Cli {
 enum Command {
     /// Render a scene (the embedded default scene when none is given).
     Render(render::RenderArgs),
+    /// Describe what a scene file contains once loaded.
+    Info(info::InfoArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Info(args) => info::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -13,13 +13,15 @@ use tempera::integrator::{self, Budget, RenderControl, RenderSettings};
 use tempera::scene::Scene;
 use tempera_image::{WriteOptions, write_image};
 
+use crate::scene;
+
 #[derive(Args, Debug)]
 pub struct RenderArgs {
     /// Scene file (.pbrt or .xml); omitted renders the embedded default scene.
     pub scene: Option<PathBuf>,
-    /// Light-transport algorithm.
-    #[arg(long, default_value = "path", value_parser = clap::builder::PossibleValuesParser::new(integrator::INTEGRATORS))]
-    pub integrator: String,
+    /// Light-transport algorithm (default: the scene's, else path).
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(integrator::INTEGRATORS))]
+    pub integrator: Option<String>,
     /// Samples per pixel (default: the scene's).
     #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
@@ -48,6 +50,10 @@ pub struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Treat scene-loading warnings (unknown directives, unused parameters, approximations) as
+    /// errors.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {
@@ -60,14 +66,9 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
 fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     let err = || format!("expected WIDTHxHEIGHT such as 640x480, got '{s}'");
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(err)?;
-    let (w, h): (u32, u32) = (
-        w.trim().parse().map_err(|_| err())?,
-        h.trim().parse().map_err(|_| err())?,
-    );
+    let (w, h): (u32, u32) = (w.trim().parse().map_err(|_| err())?, h.trim().parse().map_err(|_| err())?);
     if w == 0 || h == 0 || w > 65_536 || h > 65_536 {
-        return Err(format!(
-            "resolution must be between 1x1 and 65536x65536, got '{s}'"
-        ));
+        return Err(format!("resolution must be between 1x1 and 65536x65536, got '{s}'"));
     }
     Ok((w, h))
 }
@@ -86,43 +87,45 @@ fn install_interrupt_handler() {
     }
 }
 
-fn load_scene(args: &RenderArgs) -> Result<Scene> {
-    let builder = match &args.scene {
-        Some(path) => tempera_scene::load(path)?,
-        None => tempera::scenes::default_scene(),
-    };
-    let mut scene = builder.build().context("invalid scene")?;
-    if let Some((w, h)) = args.resolution {
-        scene.set_resolution(w, h);
-    }
-    Ok(scene)
-}
-
-fn outputs(args: &RenderArgs) -> Result<Vec<PathBuf>> {
-    if args.output.is_empty() {
-        return Ok(vec![
-            PathBuf::from("tempera.exr"),
-            PathBuf::from("tempera.png"),
-        ]);
-    }
-    for path in &args.output {
+/// Checks the requested output files before any work is done.
+fn check_outputs(paths: &[PathBuf]) -> Result<()> {
+    for path in paths {
         if tempera_image::Format::from_path(path).is_none() {
-            bail!(
-                "{}: unsupported output format (expected .exr, .pfm or .png)",
-                path.display()
-            );
+            bail!("{}: unsupported output format (expected .exr, .pfm or .png)", path.display());
         }
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
             && !dir.is_dir()
         {
-            bail!(
-                "{}: folder {} does not exist",
-                path.display(),
-                dir.display()
-            );
+            bail!("{}: folder {} does not exist", path.display(), dir.display());
         }
     }
-    Ok(args.output.clone())
+    Ok(())
+}
+
+/// Output files: `-o` if given, else the scene's film file name, else tempera.exr and tempera.png.
+fn outputs(args: &RenderArgs, scene: &Scene) -> Vec<PathBuf> {
+    if !args.output.is_empty() {
+        return args.output.clone();
+    }
+    match &scene.defaults.output {
+        Some(name) if tempera_image::Format::from_path(Path::new(name)).is_some() => vec![PathBuf::from(name)],
+        _ => vec![PathBuf::from("tempera.exr"), PathBuf::from("tempera.png")],
+    }
+}
+
+/// The integrator to use: the command line's, else the scene's when Tempera has it, else path.
+fn integrator_name(args: &RenderArgs, scene: &Scene) -> String {
+    if let Some(name) = &args.integrator {
+        return name.clone();
+    }
+    match &scene.defaults.integrator {
+        Some(name) if integrator::INTEGRATORS.contains(&name.as_str()) => name.clone(),
+        Some(name) => {
+            eprintln!("warning: the scene asks for integrator \"{name}\", which is not available; using path");
+            "path".to_owned()
+        }
+        None => "path".to_owned(),
+    }
 }
 
 fn progress_bar(args: &RenderArgs, budget: Budget, pixels: u64) -> ProgressBar {
@@ -130,36 +133,31 @@ fn progress_bar(args: &RenderArgs, budget: Budget, pixels: u64) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let (len, template) = match budget {
-        Budget::Samples(spp) => (
-            pixels * u64::from(spp),
-            "{elapsed_precise} [{wide_bar}] {percent}% (eta {eta})",
-        ),
+        Budget::Samples(spp) => (pixels * u64::from(spp), "{elapsed_precise} [{wide_bar}] {percent}% (eta {eta})"),
         Budget::Time(d) => (d.as_millis() as u64, "{elapsed_precise} [{wide_bar}] {msg}"),
     };
     let bar = ProgressBar::new(len);
-    bar.set_style(
-        ProgressStyle::with_template(template)
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
+    bar.set_style(ProgressStyle::with_template(template).expect("valid template").progress_chars("=> "));
     bar
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
-    let outputs = outputs(&args)?;
-    let scene = load_scene(&args)?;
+    check_outputs(&args.output)?;
+    let loaded = scene::load(args.scene.as_deref(), args.strict)?;
+    scene::print_warnings(&loaded.warnings, 20);
+    let mut scene = loaded.scene;
+    if let Some((w, h)) = args.resolution {
+        scene.set_resolution(w, h);
+    }
+    let outputs = outputs(&args, &scene);
     let max_depth = args.maxdepth.unwrap_or(scene.defaults.max_depth);
-    let integrator = integrator::create(&args.integrator, max_depth)
-        .with_context(|| format!("unknown integrator '{}'", args.integrator))?;
+    let name = integrator_name(&args, &scene);
+    let integrator = integrator::create(&name, max_depth).with_context(|| format!("unknown integrator '{name}'"))?;
     let budget = match args.time {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),
         None => Budget::Samples(args.spp.unwrap_or(scene.defaults.spp)),
     };
-    let settings = RenderSettings {
-        budget,
-        seed: args.seed,
-        threads: args.threads,
-    };
+    let settings = RenderSettings { budget, seed: args.seed, threads: args.threads };
     let pixels = u64::from(scene.film.width) * u64::from(scene.film.height);
     let bar = progress_bar(&args, budget, pixels);
     let start = Instant::now();
@@ -168,16 +166,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
     };
     install_interrupt_handler();
-    let control = RenderControl {
-        cancel: &CANCEL,
-        on_progress: &on_progress,
-    };
+    let control = RenderControl { cancel: &CANCEL, on_progress: &on_progress };
     let out = integrator.render(&scene, &settings, &control);
     bar.finish_and_clear();
 
-    let options = WriteOptions {
-        exposure: args.exposure,
-    };
+    let options = WriteOptions { exposure: args.exposure };
     for path in &outputs {
         write_image(path, &out.image, &options)?;
     }
@@ -187,18 +180,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-fn summary(
-    args: &RenderArgs,
-    scene: &Scene,
-    name: &str,
-    s: &tempera::integrator::RenderStats,
-    outputs: &[PathBuf],
-) {
+fn summary(args: &RenderArgs, scene: &Scene, name: &str, s: &tempera::integrator::RenderStats, outputs: &[PathBuf]) {
     let names: Vec<_> = outputs.iter().map(|p| p.display().to_string()).collect();
-    let scene_name = args.scene.as_deref().map_or_else(
-        || "default scene".to_owned(),
-        |p: &Path| p.display().to_string(),
-    );
+    let scene_name =
+        args.scene.as_deref().map_or_else(|| "default scene".to_owned(), |p: &Path| p.display().to_string());
     let pixels = f64::from(scene.film.width) * f64::from(scene.film.height);
     let spp = s.pixel_samples as f64 / pixels;
     let status = if s.cancelled { "interrupted: " } else { "" };
@@ -212,9 +197,6 @@ fn summary(
         names.join(", ")
     );
     if s.invalid_samples > 0 {
-        eprintln!(
-            "warning: {} samples were NaN, infinite or negative and were recorded as black",
-            s.invalid_samples
-        );
+        eprintln!("warning: {} samples were NaN, infinite or negative and were recorded as black", s.invalid_samples);
     }
 }

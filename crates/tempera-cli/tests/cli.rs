@@ -24,68 +24,34 @@ fn render_writes_every_requested_format() {
     let dir = scratch("formats");
     let out = tempera()
         .current_dir(&dir)
-        .args([
-            "render",
-            "--spp",
-            "2",
-            "--resolution",
-            "24x16",
-            "-o",
-            "a.exr",
-            "-o",
-            "a.pfm",
-            "-o",
-            "a.png",
-        ])
+        .args(["render", "--spp", "2", "--resolution", "24x16", "-o", "a.exr", "-o", "a.pfm", "-o", "a.png"])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
     for name in ["a.exr", "a.pfm", "a.png"] {
-        let img =
-            tempera_image::read_image(&dir.join(name), tempera_image::ColorEncoding::Srgb).unwrap();
+        let img = tempera_image::read_image(&dir.join(name), tempera_image::ColorEncoding::Srgb).unwrap();
         assert_eq!((img.width, img.height), (24, 16), "{name}");
-        assert!(
-            img.pixels.iter().any(|p| p.max_element() > 0.0),
-            "{name} is black"
-        );
+        assert!(img.pixels.iter().any(|p| p.max_element() > 0.0), "{name} is black");
     }
-    assert!(
-        stderr(&out).contains("Mrays/s"),
-        "one-line summary expected: {}",
-        stderr(&out)
-    );
+    assert!(stderr(&out).contains("Mrays/s"), "one-line summary expected: {}", stderr(&out));
 }
 
 #[test]
 fn default_outputs_are_tempera_exr_and_png_in_the_current_folder() {
     let dir = scratch("defaults");
-    let out = tempera()
-        .current_dir(&dir)
-        .args(["render", "--spp", "1", "--resolution", "8x8", "--quiet"])
-        .output()
-        .unwrap();
+    let out =
+        tempera().current_dir(&dir).args(["render", "--spp", "1", "--resolution", "8x8", "--quiet"]).output().unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(dir.join("tempera.exr").is_file() && dir.join("tempera.png").is_file());
-    assert!(
-        out.stderr.is_empty(),
-        "--quiet prints nothing: {}",
-        stderr(&out)
-    );
+    assert!(out.stderr.is_empty(), "--quiet prints nothing: {}", stderr(&out));
 }
 
 fn assert_clean_error(args: &[&str], needle: &str) {
-    let out = tempera()
-        .current_dir(scratch("errors"))
-        .args(args)
-        .output()
-        .unwrap();
+    let out = tempera().current_dir(scratch("errors")).args(args).output().unwrap();
     let err = stderr(&out);
     assert!(!out.status.success(), "{args:?} must fail");
     assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
-    assert!(
-        err.contains(needle),
-        "{args:?}: expected '{needle}' in: {err}"
-    );
+    assert!(err.contains(needle), "{args:?}: expected '{needle}' in: {err}");
 }
 
 #[test]
@@ -112,29 +78,19 @@ fn ctrl_c_stops_and_writes_the_image_so_far() {
         .spawn()
         .unwrap();
     std::thread::sleep(Duration::from_millis(1500));
-    let status = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
     assert!(status.success());
     let start = Instant::now();
     let out = loop {
         if let Some(_status) = child.try_wait().unwrap() {
             break child.wait_with_output().unwrap();
         }
-        assert!(
-            start.elapsed() < Duration::from_secs(30),
-            "render did not stop after Ctrl-C"
-        );
+        assert!(start.elapsed() < Duration::from_secs(30), "render did not stop after Ctrl-C");
         std::thread::sleep(Duration::from_millis(50));
     };
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
-    let img = tempera_image::read_image(Path::new(&out_path), tempera_image::ColorEncoding::Linear)
-        .unwrap();
-    assert!(
-        img.pixels.iter().filter(|p| p.max_element() > 0.0).count() > 2000,
-        "the partial image is kept"
-    );
+    let img = tempera_image::read_image(Path::new(&out_path), tempera_image::ColorEncoding::Linear).unwrap();
+    assert!(img.pixels.iter().filter(|p| p.max_element() > 0.0).count() > 2000, "the partial image is kept");
     assert!(img.pixels.iter().all(|p| p.is_finite()));
 }

@@ -14,10 +14,7 @@ use tempera::texture::Image;
 #[derive(Debug, thiserror::Error)]
 pub enum ImageError {
     #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Io { path: PathBuf, source: std::io::Error },
     #[error("{path}: unsupported image format (expected .exr, .pfm, .png, .jpg, .jpeg or .tga)")]
     UnsupportedFormat { path: PathBuf },
     #[error("{path}: {message}")]
@@ -67,18 +64,13 @@ impl Default for WriteOptions {
 }
 
 fn malformed(path: &Path, message: impl ToString) -> ImageError {
-    ImageError::Malformed {
-        path: path.to_owned(),
-        message: message.to_string(),
-    }
+    ImageError::Malformed { path: path.to_owned(), message: message.to_string() }
 }
 
 /// Writes `image` in the format given by `path`'s extension. EXR and PFM are linear float;
 /// PNG is sRGB-encoded 8-bit after applying the exposure.
 pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result<(), ImageError> {
-    let format = Format::from_path(path).ok_or_else(|| ImageError::UnsupportedFormat {
-        path: path.to_owned(),
-    })?;
+    let format = Format::from_path(path).ok_or_else(|| ImageError::UnsupportedFormat { path: path.to_owned() })?;
     match format {
         Format::Exr => exr::prelude::write_rgb_file(path, image.width, image.height, |x, y| {
             let p = image.get(x, y);
@@ -92,10 +84,7 @@ pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result
                 .pixels
                 .iter()
                 .flat_map(|p| (*p * scale).to_array())
-                .map(|v| {
-                    (linear_to_srgb(if v.is_finite() { v } else { 0.0 }) * 255.0 + 0.5)
-                        .clamp(0.0, 255.0) as u8
-                })
+                .map(|v| (linear_to_srgb(if v.is_finite() { v } else { 0.0 }) * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
                 .collect();
             let buffer = image::RgbImage::from_raw(image.width as u32, image.height as u32, bytes)
                 .ok_or_else(|| malformed(path, "image size overflow"))?;
@@ -106,14 +95,9 @@ pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result
 
 /// Reads an image as linear RGB. `encoding` applies to 8-bit formats (float formats are linear).
 pub fn read_image(path: &Path, encoding: ColorEncoding) -> Result<Image, ImageError> {
-    let format = Format::from_path(path).ok_or_else(|| ImageError::UnsupportedFormat {
-        path: path.to_owned(),
-    })?;
+    let format = Format::from_path(path).ok_or_else(|| ImageError::UnsupportedFormat { path: path.to_owned() })?;
     if !path.exists() {
-        return Err(ImageError::Io {
-            path: path.to_owned(),
-            source: std::io::ErrorKind::NotFound.into(),
-        });
+        return Err(ImageError::Io { path: path.to_owned(), source: std::io::ErrorKind::NotFound.into() });
     }
     match format {
         Format::Pfm => pfm::read(path),
@@ -124,13 +108,7 @@ pub fn read_image(path: &Path, encoding: ColorEncoding) -> Result<Image, ImageEr
             let (w, h) = (rgb.width() as usize, rgb.height() as usize);
             let pixels = rgb
                 .pixels()
-                .map(|p| {
-                    Rgb::new(
-                        encoding.decode(p[0]),
-                        encoding.decode(p[1]),
-                        encoding.decode(p[2]),
-                    )
-                })
+                .map(|p| Rgb::new(encoding.decode(p[0]), encoding.decode(p[1]), encoding.decode(p[2])))
                 .collect();
             Ok(Image::new(w, h, pixels))
         }
@@ -155,9 +133,7 @@ mod tests {
     use super::*;
 
     fn sample_image() -> Image {
-        let pixels = (0..12)
-            .map(|i| Rgb::new(i as f32 * 0.25, 1.0 / (i as f32 + 1.0), 3.5))
-            .collect();
+        let pixels = (0..12).map(|i| Rgb::new(i as f32 * 0.25, 1.0 / (i as f32 + 1.0), 3.5)).collect();
         Image::new(4, 3, pixels)
     }
 
@@ -182,39 +158,28 @@ mod tests {
         let img = Image::new(2, 1, vec![Rgb::splat(0.2158), Rgb::new(1.0, 0.0, 0.5)]);
         write_image(&path, &img, &WriteOptions::default()).unwrap();
         let raw = image::open(&path).unwrap().to_rgb8();
-        assert_eq!(
-            raw.get_pixel(0, 0)[0],
-            128,
-            "linear 0.2158 encodes to sRGB 128"
-        );
+        assert_eq!(raw.get_pixel(0, 0)[0], 128, "linear 0.2158 encodes to sRGB 128");
         let back = read_image(&path, ColorEncoding::Srgb).unwrap();
         for (a, b) in back.pixels.iter().zip(&img.pixels) {
             assert!((*a - *b).abs().max_element() < 0.005, "{a} vs {b}");
         }
         // One stop of exposure doubles the linear value before encoding.
-        write_image(
-            &path,
-            &Image::new(1, 1, vec![Rgb::splat(0.1079)]),
-            &WriteOptions { exposure: 1.0 },
-        )
-        .unwrap();
-        assert_eq!(
-            image::open(&path).unwrap().to_rgb8().get_pixel(0, 0)[0],
-            128
-        );
+        write_image(&path, &Image::new(1, 1, vec![Rgb::splat(0.1079)]), &WriteOptions { exposure: 1.0 }).unwrap();
+        assert_eq!(image::open(&path).unwrap().to_rgb8().get_pixel(0, 0)[0], 128);
     }
 
     #[test]
     fn eight_bit_textures_decode_to_linear() {
         let dir = std::env::temp_dir().join(format!("tempera-ldr-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let raw = image::RgbImage::from_fn(8, 8, |x, _| {
-            if x < 4 {
-                image::Rgb([128, 128, 128])
-            } else {
-                image::Rgb([255, 0, 64])
-            }
-        });
+        let raw =
+            image::RgbImage::from_fn(
+                8,
+                8,
+                |x, _| {
+                    if x < 4 { image::Rgb([128, 128, 128]) } else { image::Rgb([255, 0, 64]) }
+                },
+            );
         for name in ["t.tga", "t.jpg", "t.png"] {
             let path = dir.join(name);
             raw.save(&path).unwrap();
@@ -227,10 +192,7 @@ mod tests {
                 "{name}: sRGB 128 decodes to 0.2158, got {}",
                 srgb.get(1, 4).x
             );
-            assert!(
-                (linear.get(1, 4).x - 128.0 / 255.0).abs() < tol,
-                "{name}: linear keeps the code value"
-            );
+            assert!((linear.get(1, 4).x - 128.0 / 255.0).abs() < tol, "{name}: linear keeps the code value");
             assert!((srgb.get(6, 4).x - 1.0).abs() < tol * 5.0, "{name}");
         }
         let gamma = ColorEncoding::Gamma(2.2).decode(0.5);
@@ -241,16 +203,12 @@ mod tests {
     fn malformed_pfm_is_an_error_naming_the_file() {
         let dir = std::env::temp_dir().join(format!("tempera-badpfm-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        for (name, bytes) in [
-            ("a.pfm", &b"P6\n1 1\n-1\n"[..]),
-            ("b.pfm", b"PF\n2 2\n-1.0\n\0\0"),
-            ("c.pfm", b"PF\n-2 x\n"),
-        ] {
+        for (name, bytes) in
+            [("a.pfm", &b"P6\n1 1\n-1\n"[..]), ("b.pfm", b"PF\n2 2\n-1.0\n\0\0"), ("c.pfm", b"PF\n-2 x\n")]
+        {
             let path = dir.join(name);
             std::fs::write(&path, bytes).unwrap();
-            let err = read_image(&path, ColorEncoding::Linear)
-                .unwrap_err()
-                .to_string();
+            let err = read_image(&path, ColorEncoding::Linear).unwrap_err().to_string();
             assert!(err.contains(name), "{err}");
         }
     }
@@ -259,12 +217,7 @@ mod tests {
     fn errors_name_the_file() {
         let err = read_image(Path::new("/nonexistent/x.exr"), ColorEncoding::Linear).unwrap_err();
         assert!(err.to_string().contains("/nonexistent/x.exr"));
-        let err = write_image(
-            Path::new("out.bmp"),
-            &sample_image(),
-            &WriteOptions::default(),
-        )
-        .unwrap_err();
+        let err = write_image(Path::new("out.bmp"), &sample_image(), &WriteOptions::default()).unwrap_err();
         assert!(err.to_string().contains("unsupported"));
     }
 }

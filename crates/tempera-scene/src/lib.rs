@@ -2,6 +2,13 @@
 //! [`tempera::scene::SceneBuilder`]; the core itself knows no file format. The format is chosen
 //! by extension: `.pbrt` (pbrt-v4) and `.xml` (Mitsuba 0.5/0.6).
 
+pub mod diagnostics;
+mod pbrt;
+pub mod ply;
+
+pub use diagnostics::{Loc, Warning};
+
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use tempera::scene::SceneBuilder;
 
@@ -9,14 +16,41 @@ use tempera::scene::SceneBuilder;
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
     #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Io { path: PathBuf, source: std::io::Error },
     #[error("{path}: unknown scene format (expected a .pbrt or .xml file)")]
     UnknownFormat { path: PathBuf },
-    #[error("{path}: {format} scene files are not supported by this version of Tempera")]
-    Unsupported { path: PathBuf, format: &'static str },
+    #[error("{loc}: {message}")]
+    Syntax { loc: Loc, message: String },
+    #[error("{message}")]
+    Unsupported { message: String },
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Treat warnings (unknown directives, unused parameters, approximations) as errors.
+    pub strict: bool,
+}
+
+/// What a loader found, for `tempera info` and the render summary.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadInfo {
+    pub files: usize,
+    pub shapes: usize,
+    pub triangles: usize,
+    pub instances: usize,
+    pub textures: usize,
+    pub materials: BTreeMap<String, usize>,
+    pub lights: BTreeMap<String, usize>,
+    /// The integrator named by the file, as written there.
+    pub integrator: Option<String>,
+}
+
+/// A loaded scene, ready to build, with the loader's warnings.
+#[derive(Debug)]
+pub struct LoadedScene {
+    pub builder: SceneBuilder,
+    pub warnings: Vec<Warning>,
+    pub info: LoadInfo,
 }
 
 /// Scene file formats recognised by extension.
@@ -36,23 +70,18 @@ impl SceneFormat {
     }
 }
 
-/// Loads the scene at `path` into a builder.
-pub fn load(path: &Path) -> Result<SceneBuilder, LoadError> {
-    std::fs::metadata(path).map_err(|source| LoadError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    let format = SceneFormat::from_path(path).ok_or_else(|| LoadError::UnknownFormat {
-        path: path.to_owned(),
-    })?;
-    let name = match format {
-        SceneFormat::Pbrt => "pbrt-v4",
-        SceneFormat::Mitsuba => "Mitsuba XML",
-    };
-    Err(LoadError::Unsupported {
-        path: path.to_owned(),
-        format: name,
-    })
+/// Loads the scene at `path`.
+pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
+    std::fs::metadata(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
+    match SceneFormat::from_path(path).ok_or_else(|| LoadError::UnknownFormat { path: path.to_owned() })? {
+        SceneFormat::Pbrt => pbrt::load(path, options),
+        SceneFormat::Mitsuba => Err(LoadError::Unsupported {
+            message: format!(
+                "{}: Mitsuba XML scene files are not supported by this version of Tempera",
+                path.display()
+            ),
+        }),
+    }
 }
 
 #[cfg(test)]
@@ -61,10 +90,10 @@ mod tests {
 
     #[test]
     fn missing_and_unknown_files_are_clear_errors() {
-        let err = load(Path::new("/no/such/scene.pbrt")).unwrap_err();
+        let err = load(Path::new("/no/such/scene.pbrt"), &LoadOptions::default()).unwrap_err();
         assert!(matches!(err, LoadError::Io { .. }));
         assert!(err.to_string().starts_with("/no/such/scene.pbrt: "));
-        let err = load(Path::new("Cargo.toml")).unwrap_err();
+        let err = load(Path::new("Cargo.toml"), &LoadOptions::default()).unwrap_err();
         assert!(matches!(err, LoadError::UnknownFormat { .. }), "{err}");
     }
 }

@@ -22,13 +22,7 @@ fn bumpy_sphere() -> TriangleMesh {
         for j in 0..=SEGMENTS {
             let phi = std::f32::consts::TAU * j as f32 / SEGMENTS as f32;
             let r = 1.0 + 0.05 * (7.0 * theta).sin() * (11.0 * phi).cos();
-            positions.push(
-                r * Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.sin() * phi.sin(),
-                    theta.cos(),
-                ),
-            );
+            positions.push(r * Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()));
         }
     }
     let mut indices = Vec::with_capacity((2 * RINGS * SEGMENTS) as usize);
@@ -61,33 +55,23 @@ static SETUP: LazyLock<Setup> = LazyLock::new(|| {
             Ray::new(o, (target - o).normalize())
         })
         .collect();
-    Setup {
-        geometry,
-        bvh,
-        rays,
-    }
+    Setup { geometry, bvh, rays }
 });
 
 #[divan::bench]
 fn closest_hit(bencher: Bencher) {
     let s = &*SETUP;
-    bencher.counter(ItemsCount::new(RAYS)).bench(|| {
-        s.rays
-            .iter()
-            .filter(|r| s.bvh.intersect(&s.geometry, r, f32::INFINITY).is_some())
-            .count()
-    });
+    bencher
+        .counter(ItemsCount::new(RAYS))
+        .bench(|| s.rays.iter().filter(|r| s.bvh.intersect(&s.geometry, r, f32::INFINITY).is_some()).count());
 }
 
 #[divan::bench]
 fn any_hit(bencher: Bencher) {
     let s = &*SETUP;
-    bencher.counter(ItemsCount::new(RAYS)).bench(|| {
-        s.rays
-            .iter()
-            .filter(|r| s.bvh.occluded(&s.geometry, r, f32::INFINITY))
-            .count()
-    });
+    bencher
+        .counter(ItemsCount::new(RAYS))
+        .bench(|| s.rays.iter().filter(|r| s.bvh.occluded(&s.geometry, r, f32::INFINITY)).count());
 }
 
 fn main() {

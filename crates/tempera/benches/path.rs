@@ -11,24 +11,15 @@ use tempera::scene::Scene;
 const SIZE: u32 = 128;
 
 static SCENE: LazyLock<Scene> = LazyLock::new(|| {
-    let mut scene = tempera::scenes::default_scene()
-        .build()
-        .expect("the default scene builds");
+    let mut scene = tempera::scenes::default_scene().build().expect("the default scene builds");
     scene.set_resolution(SIZE, SIZE);
     scene
 });
 
 fn render(threads: usize) {
     let cancel = AtomicBool::new(false);
-    let control = RenderControl {
-        cancel: &cancel,
-        on_progress: &|_| {},
-    };
-    let settings = RenderSettings {
-        budget: Budget::Samples(1),
-        seed: 1,
-        threads,
-    };
+    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let settings = RenderSettings { budget: Budget::Samples(1), seed: 1, threads };
     let out = PathIntegrator::new(8).render(&SCENE, &settings, &control);
     divan::black_box(out.image);
 }
@@ -36,9 +27,7 @@ fn render(threads: usize) {
 #[divan::bench(args = [1, 0])]
 fn default_scene_samples(bencher: Bencher, threads: usize) {
     LazyLock::force(&SCENE);
-    bencher
-        .counter(ItemsCount::new((SIZE * SIZE) as usize))
-        .bench(|| render(threads));
+    bencher.counter(ItemsCount::new((SIZE * SIZE) as usize)).bench(|| render(threads));
 }
 
 fn main() {

@@ -55,11 +55,7 @@ impl Binning {
             Binning::Cap { cos_min, .. } => (1.0 - a * (1.0 - cos_min), 1.0 - cos_min),
         };
         let sin = (1.0 - cos * cos).max(0.0).sqrt();
-        let l = Vec3::new(
-            (sin * phi.cos()) as f32,
-            (sin * phi.sin()) as f32,
-            cos as f32,
-        );
+        let l = Vec3::new((sin * phi.cos()) as f32, (sin * phi.sin()) as f32, cos as f32);
         let w = match *self {
             Binning::Sphere => l,
             Binning::Cap { frame, .. } => frame.to_world(l),
@@ -157,18 +153,7 @@ pub fn chi2_directions(
     }
     let integrals = binning.integrals(&pdf);
     let total: f64 = integrals.iter().sum();
-    let expected: Vec<f64> = integrals
-        .iter()
-        .map(|i| produced as f64 * i / total)
-        .collect();
-    let p_value = if outside > 0 {
-        0.0
-    } else {
-        chi2_p_value(&counts, &expected)
-    };
-    Chi2Result {
-        p_value,
-        pdf_integral: total,
-        sampled_fraction: produced as f64 / n as f64,
-    }
+    let expected: Vec<f64> = integrals.iter().map(|i| produced as f64 * i / total).collect();
+    let p_value = if outside > 0 { 0.0 } else { chi2_p_value(&counts, &expected) };
+    Chi2Result { p_value, pdf_integral: total, sampled_fraction: produced as f64 / n as f64 }
 }

@@ -22,7 +22,6 @@ impl Accel for BruteForce {
 
     fn occluded(&self, geometry: &Geometry, ray: &Ray, t_max: f32) -> bool {
         let shear = RayShear::new(ray);
-        (0..geometry.prims.len() as u32)
-            .any(|i| geometry.intersect_prim(i, ray, &shear, t_max).is_some())
+        (0..geometry.prims.len() as u32).any(|i| geometry.intersect_prim(i, ray, &shear, t_max).is_some())
     }
 }

@@ -35,10 +35,7 @@ impl Bvh {
                 let (lo, hi) = geometry.bounds(i);
                 // Pad flat boxes (axis-aligned quads) so that slab tests stay robust.
                 let pad = (hi - lo).max_element().max(1e-6) * 1e-5;
-                Bounds(Aabb::new(
-                    (lo - Vec3::splat(pad)).into(),
-                    (hi + Vec3::splat(pad)).into(),
-                ))
+                Bounds(Aabb::new((lo - Vec3::splat(pad)).into(), (hi + Vec3::splat(pad)).into()))
             })
             .collect();
         let mut tree = obvhs::cwbvh::builder::build_cwbvh(
@@ -64,18 +61,14 @@ impl Accel for Bvh {
         let shear = RayShear::new(ray);
         let mut best: Option<PrimHit> = None;
         let mut hit = obvhs::ray::RayHit::none();
-        tree.ray_traverse(Self::bvh_ray(ray, t_max), &mut hit, |r, id| match geometry
-            .intersect_prim(id as u32, ray, &shear, r.tmax)
-        {
-            Some((t, b)) => {
-                best = Some(PrimHit {
-                    prim: id as u32,
-                    t,
-                    b,
-                });
-                t
+        tree.ray_traverse(Self::bvh_ray(ray, t_max), &mut hit, |r, id| {
+            match geometry.intersect_prim(id as u32, ray, &shear, r.tmax) {
+                Some((t, b)) => {
+                    best = Some(PrimHit { prim: id as u32, t, b });
+                    t
+                }
+                None => f32::INFINITY,
             }
-            None => f32::INFINITY,
         });
         best
     }
@@ -86,9 +79,7 @@ impl Accel for Bvh {
         };
         let shear = RayShear::new(ray);
         !tree.ray_traverse_miss(Self::bvh_ray(ray, t_max), |_, id| {
-            geometry
-                .intersect_prim(id as u32, ray, &shear, t_max)
-                .map_or(f32::INFINITY, |(t, _)| t)
+            geometry.intersect_prim(id as u32, ray, &shear, t_max).map_or(f32::INFINITY, |(t, _)| t)
         })
     }
 }
@@ -109,15 +100,9 @@ mod tests {
             positions.extend([c, c + r3() * 0.1, c + r3() * 0.1]);
             indices.push([3 * t, 3 * t + 1, 3 * t + 2]);
         }
-        let mut shapes = vec![Shape::Mesh(
-            TriangleMesh::new(positions, indices, None, None).unwrap(),
-        )];
+        let mut shapes = vec![Shape::Mesh(TriangleMesh::new(positions, indices, None, None).unwrap())];
         for _ in 0..20 {
-            shapes.push(Shape::Sphere(Sphere {
-                center: r3(),
-                radius: 0.05,
-                reverse_orientation: false,
-            }));
+            shapes.push(Shape::Sphere(Sphere { center: r3(), radius: 0.05, reverse_orientation: false }));
             let n = r3().normalize();
             shapes.push(Shape::Disk(Disk::new(r3(), n, 0.08)));
         }
@@ -131,12 +116,8 @@ mod tests {
         let bvh = Bvh::build(&mut geometry);
         let mut hits = 0;
         for i in 0..20_000 {
-            let o =
-                Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - Vec3::splat(1.5);
-            let d = crate::math::warp::uniform_sphere(crate::math::Vec2::new(
-                rng.next_f32(),
-                rng.next_f32(),
-            ));
+            let o = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - Vec3::splat(1.5);
+            let d = crate::math::warp::uniform_sphere(crate::math::Vec2::new(rng.next_f32(), rng.next_f32()));
             let ray = Ray::new(o, d);
             let t_max = if i % 3 == 0 { 0.7 } else { f32::INFINITY };
             let a = bvh.intersect(&geometry, &ray, t_max);
@@ -144,16 +125,8 @@ mod tests {
             match (a, b) {
                 (Some(a), Some(b)) => {
                     hits += 1;
-                    assert!(
-                        (a.t - b.t).abs() <= 1e-6 * b.t.max(1.0),
-                        "t differs: {} vs {}",
-                        a.t,
-                        b.t
-                    );
-                    assert!(
-                        a.prim == b.prim || (a.t - b.t).abs() == 0.0,
-                        "primitive differs"
-                    );
+                    assert!((a.t - b.t).abs() <= 1e-6 * b.t.max(1.0), "t differs: {} vs {}", a.t, b.t);
+                    assert!(a.prim == b.prim || (a.t - b.t).abs() == 0.0, "primitive differs");
                 }
                 (None, None) => {}
                 _ => panic!("bvh and brute force disagree on ray {i}: {a:?} vs {b:?}"),

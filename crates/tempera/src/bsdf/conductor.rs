@@ -71,12 +71,6 @@ impl Conductor {
             return None;
         }
         let pdf = self.distribution.pdf(wo, wm) / (4.0 * wo.dot(wm).abs());
-        Some(BsdfSample {
-            f: self.microfacet(wo, wi),
-            wi,
-            pdf,
-            delta: false,
-            transmission: false,
-        })
+        Some(BsdfSample { f: self.microfacet(wo, wi), wi, pdf, delta: false, transmission: false })
     }
 }

@@ -54,18 +54,13 @@ impl Dielectric {
             d.d(wm) * d.g(wo, wi) * f / (4.0 * wi.z * wo.z).abs()
         } else {
             let denom = (wi.dot(wm) + wo.dot(wm) / etap).powi(2) * wi.z * wo.z;
-            let mut ft =
-                d.d(wm) * (1.0 - f) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / denom).abs();
+            let mut ft = d.d(wm) * (1.0 - f) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / denom).abs();
             if mode == TransportMode::Radiance {
                 ft /= etap * etap;
             }
             ft
         };
-        if v.is_finite() {
-            Rgb::splat(v)
-        } else {
-            Rgb::ZERO
-        }
+        if v.is_finite() { Rgb::splat(v) } else { Rgb::ZERO }
     }
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
@@ -104,13 +99,7 @@ impl Dielectric {
             let d = &self.distribution;
             let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * r / (r + t);
             let f = d.d(wm) * d.g(wo, wi) * r / (4.0 * wi.z * wo.z).abs();
-            Some(BsdfSample {
-                f: Rgb::splat(f),
-                wi,
-                pdf,
-                delta: false,
-                transmission: false,
-            })
+            Some(BsdfSample { f: Rgb::splat(f), wi, pdf, delta: false, transmission: false })
         } else {
             let (wi, etap) = fresnel::refract(wo, wm, self.eta)?;
             if same_hemisphere(wo, wi) || wi.z == 0.0 {
@@ -120,18 +109,11 @@ impl Dielectric {
             let denom = (wi.dot(wm) + wo.dot(wm) / etap).powi(2);
             let dwm_dwi = wi.dot(wm).abs() / denom;
             let pdf = d.pdf(wo, wm) * dwm_dwi * t / (r + t);
-            let mut ft =
-                t * d.d(wm) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / (wi.z * wo.z * denom)).abs();
+            let mut ft = t * d.d(wm) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / (wi.z * wo.z * denom)).abs();
             if mode == TransportMode::Radiance {
                 ft /= etap * etap;
             }
-            Some(BsdfSample {
-                f: Rgb::splat(ft),
-                wi,
-                pdf,
-                delta: false,
-                transmission: true,
-            })
+            Some(BsdfSample { f: Rgb::splat(ft), wi, pdf, delta: false, transmission: true })
         }
     }
 
@@ -153,12 +135,6 @@ impl Dielectric {
         if mode == TransportMode::Radiance {
             ft /= etap * etap;
         }
-        Some(BsdfSample {
-            f: Rgb::splat(ft),
-            wi,
-            pdf: t / (r + t),
-            delta: true,
-            transmission: true,
-        })
+        Some(BsdfSample { f: Rgb::splat(ft), wi, pdf: t / (r + t), delta: true, transmission: true })
     }
 }

@@ -12,19 +12,11 @@ pub struct Diffuse {
 
 impl Diffuse {
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
-        if same_hemisphere(wo, wi) {
-            self.reflectance * FRAC_1_PI
-        } else {
-            Rgb::ZERO
-        }
+        if same_hemisphere(wo, wi) { self.reflectance * FRAC_1_PI } else { Rgb::ZERO }
     }
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if same_hemisphere(wo, wi) {
-            cosine_hemisphere_pdf(wi.z.abs())
-        } else {
-            0.0
-        }
+        if same_hemisphere(wo, wi) { cosine_hemisphere_pdf(wi.z.abs()) } else { 0.0 }
     }
 
     pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {

@@ -40,10 +40,7 @@ impl Complex {
         Self::new(self.re - o.re, self.im - o.im)
     }
     fn mul(self, o: Self) -> Self {
-        Self::new(
-            self.re * o.re - self.im * o.im,
-            self.re * o.im + self.im * o.re,
-        )
+        Self::new(self.re * o.re - self.im * o.im, self.re * o.im + self.im * o.re)
     }
     fn scale(self, s: f32) -> Self {
         Self::new(self.re * s, self.im * s)
@@ -53,10 +50,7 @@ impl Complex {
     }
     fn div(self, o: Self) -> Self {
         let s = 1.0 / o.norm();
-        Self::new(
-            (self.re * o.re + self.im * o.im) * s,
-            (self.im * o.re - self.re * o.im) * s,
-        )
+        Self::new((self.re * o.re + self.im * o.im) * s, (self.im * o.re - self.re * o.im) * s)
     }
     fn sqrt(self) -> Self {
         let n = self.norm().sqrt();
@@ -65,11 +59,7 @@ impl Complex {
         }
         let t1 = (0.5 * (n + self.re.abs())).sqrt();
         let t2 = 0.5 * self.im / t1;
-        if self.re >= 0.0 {
-            Self::new(t1, t2)
-        } else {
-            Self::new(t2.abs(), t1.copysign(self.im))
-        }
+        if self.re >= 0.0 { Self::new(t1, t2) } else { Self::new(t2.abs(), t1.copysign(self.im)) }
     }
 }
 
@@ -86,20 +76,12 @@ pub fn conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
     let ect = eta.mul(cos_t);
     let r_perp = ci.sub(ect).div(ci.add(ect));
     let r = 0.5 * (r_parl.norm() + r_perp.norm());
-    if r.is_finite() {
-        r.clamp(0.0, 1.0)
-    } else {
-        1.0
-    }
+    if r.is_finite() { r.clamp(0.0, 1.0) } else { 1.0 }
 }
 
 /// Per-channel conductor Fresnel reflectance.
 pub fn conductor_rgb(cos_i: f32, eta: Rgb, k: Rgb) -> Rgb {
-    Rgb::new(
-        conductor(cos_i, eta.x, k.x),
-        conductor(cos_i, eta.y, k.y),
-        conductor(cos_i, eta.z, k.z),
-    )
+    Rgb::new(conductor(cos_i, eta.x, k.x), conductor(cos_i, eta.y, k.y), conductor(cos_i, eta.z, k.z))
 }
 
 /// pbrt-v4's `reflectance` parametrisation of a conductor: `eta = 1`, `k = 2·sqrt(r)/sqrt(1-r)`,
@@ -165,20 +147,14 @@ mod tests {
         }
         let (eta, k) = conductor_from_reflectance(Rgb::new(0.2, 0.5, 0.9));
         let r = conductor_rgb(1.0, eta, k);
-        assert!(
-            (r - Rgb::new(0.2, 0.5, 0.9)).abs().max_element() < 1e-3,
-            "{r}"
-        );
+        assert!((r - Rgb::new(0.2, 0.5, 0.9)).abs().max_element() < 1e-3, "{r}");
     }
 
     #[test]
     fn diffuse_fresnel_relation() {
         // Energy balance across the interface: 1 - Fdr(eta) = eta² (1 - Fdr(1/eta)).
         let (ext, int) = (diffuse_reflectance(1.5), diffuse_reflectance(1.0 / 1.5));
-        assert!(
-            (1.0 - ext - 1.5 * 1.5 * (1.0 - int)).abs() < 2e-3,
-            "{ext} {int}"
-        );
+        assert!((1.0 - ext - 1.5 * 1.5 * (1.0 - int)).abs() < 2e-3, "{ext} {int}");
         assert!((ext - 0.092).abs() < 0.005);
     }
 

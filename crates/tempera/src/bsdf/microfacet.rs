@@ -18,10 +18,7 @@ pub struct Ggx {
 
 impl Ggx {
     pub fn new(alpha_x: f32, alpha_y: f32) -> Self {
-        Self {
-            alpha_x: alpha_x.max(0.0),
-            alpha_y: alpha_y.max(0.0),
-        }
+        Self { alpha_x: alpha_x.max(0.0), alpha_y: alpha_y.max(0.0) }
     }
 
     pub fn isotropic(alpha: f32) -> Self {
@@ -45,9 +42,7 @@ impl Ggx {
         if cos2 < 1e-12 {
             return 0.0;
         }
-        let e = (wm.x * wm.x / (self.alpha_x * self.alpha_x)
-            + wm.y * wm.y / (self.alpha_y * self.alpha_y))
-            / cos2;
+        let e = (wm.x * wm.x / (self.alpha_x * self.alpha_x) + wm.y * wm.y / (self.alpha_y * self.alpha_y)) / cos2;
         let v = 1.0 / (PI * self.alpha_x * self.alpha_y * cos2 * cos2 * (1.0 + e) * (1.0 + e));
         if v.is_finite() { v } else { 0.0 }
     }
@@ -59,9 +54,7 @@ impl Ggx {
         if cos2 == 0.0 {
             return f32::INFINITY;
         }
-        let a2_tan2 = (w.x * w.x * self.alpha_x * self.alpha_x
-            + w.y * w.y * self.alpha_y * self.alpha_y)
-            / cos2;
+        let a2_tan2 = (w.x * w.x * self.alpha_x * self.alpha_x + w.y * w.y * self.alpha_y * self.alpha_y) / cos2;
         ((1.0 + a2_tan2).sqrt() - 1.0) * 0.5
     }
 
@@ -92,11 +85,7 @@ impl Ggx {
         if wh.z < 0.0 {
             wh = -wh;
         }
-        let t1 = if wh.z < 0.99999 {
-            Vec3::Z.cross(wh).normalize()
-        } else {
-            Vec3::X
-        };
+        let t1 = if wh.z < 0.99999 { Vec3::Z.cross(wh).normalize() } else { Vec3::X };
         let t2 = wh.cross(t1);
         let mut p = polar_disk(u);
         let h = safe_sqrt(1.0 - p.x * p.x);

@@ -111,14 +111,12 @@ pub struct SurfaceBsdf {
 impl SurfaceBsdf {
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
-        self.bsdf
-            .eval(self.frame.to_local(wo), self.frame.to_local(wi), mode)
+        self.bsdf.eval(self.frame.to_local(wo), self.frame.to_local(wi), mode)
     }
 
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.bsdf
-            .pdf(self.frame.to_local(wo), self.frame.to_local(wi))
+        self.bsdf.pdf(self.frame.to_local(wo), self.frame.to_local(wi))
     }
 
     /// Samples a world-space direction; `wi` in the result is in world space.

@@ -32,11 +32,7 @@ pub struct PlasticCoat {
 
 impl PlasticCoat {
     pub fn new(eta: f32, nonlinear: bool) -> Self {
-        Self {
-            eta,
-            fdr_inner: fresnel::diffuse_reflectance(1.0 / eta),
-            nonlinear,
-        }
+        Self { eta, fdr_inner: fresnel::diffuse_reflectance(1.0 / eta), nonlinear }
     }
 }
 
@@ -50,28 +46,14 @@ impl Plastic {
         } / (coat.eta * coat.eta);
         let d_avg = reflectance.element_sum() / 3.0;
         let s = specular.max(0.0);
-        let specular_weight = if s + d_avg > 0.0 {
-            s / (s + d_avg)
-        } else {
-            1.0
-        };
-        Self {
-            distribution,
-            eta: coat.eta,
-            diffuse,
-            specular: s,
-            specular_weight,
-        }
+        let specular_weight = if s + d_avg > 0.0 { s / (s + d_avg) } else { 1.0 };
+        Self { distribution, eta: coat.eta, diffuse, specular: s, specular_weight }
     }
 
     #[inline]
     fn upper(wo: Vec3, wi: Vec3) -> Option<(Vec3, Vec3)> {
         let flip = |w: Vec3| {
-            if wo.z < 0.0 {
-                Vec3::new(w.x, w.y, -w.z)
-            } else {
-                w
-            }
+            if wo.z < 0.0 { Vec3::new(w.x, w.y, -w.z) } else { w }
         };
         let (o, i) = (flip(wo), flip(wi));
         (o.z > 0.0 && i.z > 0.0).then_some((o, i))
@@ -94,8 +76,7 @@ impl Plastic {
         if !self.distribution.effectively_smooth() {
             let wm = (wo + wi).normalize();
             let d = &self.distribution;
-            let spec = d.d(wm) * d.g(wo, wi) * fresnel::dielectric(wo.dot(wm), self.eta)
-                / (4.0 * wo.z * wi.z);
+            let spec = d.d(wm) * d.g(wo, wi) * fresnel::dielectric(wo.dot(wm), self.eta) / (4.0 * wo.z * wi.z);
             f += Rgb::splat(self.specular * spec);
         }
         f
@@ -119,11 +100,7 @@ impl Plastic {
             return None;
         }
         let flip = |w: Vec3| {
-            if wo.z < 0.0 {
-                Vec3::new(w.x, w.y, -w.z)
-            } else {
-                w
-            }
+            if wo.z < 0.0 { Vec3::new(w.x, w.y, -w.z) } else { w }
         };
         let wo_up = flip(wo);
         let ps = self.specular_probability(wo_up.z);
@@ -132,13 +109,7 @@ impl Plastic {
             if smooth {
                 let wi = Vec3::new(-wo_up.x, -wo_up.y, wo_up.z);
                 let f = self.specular * fresnel::dielectric(wo_up.z, self.eta) / wi.z;
-                return Some(BsdfSample {
-                    f: Rgb::splat(f),
-                    wi: flip(wi),
-                    pdf: ps,
-                    delta: true,
-                    transmission: false,
-                });
+                return Some(BsdfSample { f: Rgb::splat(f), wi: flip(wi), pdf: ps, delta: true, transmission: false });
             }
             let wm = self.distribution.sample_wm(wo_up, u);
             crate::math::reflect(wo_up, wm)
@@ -149,12 +120,6 @@ impl Plastic {
             return None;
         }
         let wi = flip(wi_up);
-        Some(BsdfSample {
-            f: self.eval(wo, wi),
-            wi,
-            pdf: self.pdf(wo, wi),
-            delta: false,
-            transmission: false,
-        })
+        Some(BsdfSample { f: self.eval(wo, wi), wi, pdf: self.pdf(wo, wi), delta: false, transmission: false })
     }
 }

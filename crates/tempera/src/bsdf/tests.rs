@@ -16,12 +16,7 @@ fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
 fn rough_bsdfs() -> Vec<(&'static str, Bsdf)> {
     let coat = PlasticCoat::new(1.5, false);
     vec![
-        (
-            "diffuse",
-            Bsdf::Diffuse(Diffuse {
-                reflectance: Rgb::new(0.8, 0.5, 0.2),
-            }),
-        ),
+        ("diffuse", Bsdf::Diffuse(Diffuse { reflectance: Rgb::new(0.8, 0.5, 0.2) })),
         (
             "conductor 0.2",
             Bsdf::Conductor(Conductor {
@@ -32,51 +27,13 @@ fn rough_bsdfs() -> Vec<(&'static str, Bsdf)> {
         ),
         (
             "conductor aniso",
-            Bsdf::Conductor(Conductor {
-                distribution: Ggx::new(0.15, 0.5),
-                eta: Rgb::splat(1.5),
-                k: Rgb::splat(3.0),
-            }),
+            Bsdf::Conductor(Conductor { distribution: Ggx::new(0.15, 0.5), eta: Rgb::splat(1.5), k: Rgb::splat(3.0) }),
         ),
-        (
-            "dielectric 0.2",
-            Bsdf::Dielectric(Dielectric {
-                distribution: Ggx::isotropic(0.2),
-                eta: 1.5,
-            }),
-        ),
-        (
-            "dielectric 0.5",
-            Bsdf::Dielectric(Dielectric {
-                distribution: Ggx::isotropic(0.5),
-                eta: 1.33,
-            }),
-        ),
-        (
-            "dielectric aniso",
-            Bsdf::Dielectric(Dielectric {
-                distribution: Ggx::new(0.3, 0.1),
-                eta: 1.7,
-            }),
-        ),
-        (
-            "plastic 0.25",
-            Bsdf::Plastic(Plastic::new(
-                Ggx::isotropic(0.25),
-                &coat,
-                Rgb::new(0.7, 0.3, 0.1),
-                1.0,
-            )),
-        ),
-        (
-            "plastic smooth",
-            Bsdf::Plastic(Plastic::new(
-                Ggx::isotropic(0.0),
-                &coat,
-                Rgb::splat(0.5),
-                1.0,
-            )),
-        ),
+        ("dielectric 0.2", Bsdf::Dielectric(Dielectric { distribution: Ggx::isotropic(0.2), eta: 1.5 })),
+        ("dielectric 0.5", Bsdf::Dielectric(Dielectric { distribution: Ggx::isotropic(0.5), eta: 1.33 })),
+        ("dielectric aniso", Bsdf::Dielectric(Dielectric { distribution: Ggx::new(0.3, 0.1), eta: 1.7 })),
+        ("plastic 0.25", Bsdf::Plastic(Plastic::new(Ggx::isotropic(0.25), &coat, Rgb::new(0.7, 0.3, 0.1), 1.0))),
+        ("plastic smooth", Bsdf::Plastic(Plastic::new(Ggx::isotropic(0.0), &coat, Rgb::splat(0.5), 1.0))),
     ]
 }
 
@@ -91,18 +48,10 @@ fn sampling_matches_pdf_chi_square() {
             let r = chi2_sphere(
                 400_000,
                 k as u64 + 1,
-                |u, uc| {
-                    bsdf.sample(wo, uc, u, TransportMode::Radiance)
-                        .filter(|s| !s.delta)
-                        .map(|s| s.wi)
-                },
+                |u, uc| bsdf.sample(wo, uc, u, TransportMode::Radiance).filter(|s| !s.delta).map(|s| s.wi),
                 |wi| f64::from(bsdf.pdf(wo, wi)),
             );
-            assert!(
-                r.p_value > 1e-4,
-                "{name}, wo #{k}: chi-square p = {:e}",
-                r.p_value
-            );
+            assert!(r.p_value > 1e-4, "{name}, wo #{k}: chi-square p = {:e}", r.p_value);
             // The density of the non-delta lobes integrates to the fraction of non-delta samples.
             assert!(
                 (r.pdf_integral - r.sampled_fraction).abs() < 0.01,
@@ -131,16 +80,8 @@ fn sampled_values_agree_with_eval_and_pdf() {
                     let f = bsdf.eval(wo, s.wi, mode);
                     let pdf = bsdf.pdf(wo, s.wi);
                     let tol = |a: f32| 2e-3 * a.abs().max(1e-3);
-                    assert!(
-                        (f - s.f).abs().max_element() <= tol(s.f.max_element()),
-                        "{name}: f {f} vs {}",
-                        s.f
-                    );
-                    assert!(
-                        (pdf - s.pdf).abs() <= tol(s.pdf),
-                        "{name}: pdf {pdf} vs {}",
-                        s.pdf
-                    );
+                    assert!((f - s.f).abs().max_element() <= tol(s.f.max_element()), "{name}: f {f} vs {}", s.f);
+                    assert!((pdf - s.pdf).abs() <= tol(s.pdf), "{name}: pdf {pdf} vs {}", s.pdf);
                 }
             }
         }
@@ -159,10 +100,7 @@ fn reciprocity() {
             let f_ab = bsdf.eval(a, b, TransportMode::Radiance);
             let f_ba = bsdf.eval(b, a, TransportMode::Importance);
             let scale = f_ab.max_element().max(f_ba.max_element()).max(1e-3);
-            assert!(
-                (f_ab - f_ba).abs().max_element() <= 2e-3 * scale,
-                "{name}: {f_ab} vs {f_ba} for {a} {b}"
-            );
+            assert!((f_ab - f_ba).abs().max_element() <= 2e-3 * scale, "{name}: {f_ab} vs {f_ba} for {a} {b}");
         }
     }
 }
@@ -173,17 +111,14 @@ fn albedo(bsdf: &Bsdf, wo: Vec3, mode: TransportMode, n: usize) -> (f64, f64) {
     let (mut sum, mut sum2) = (0.0f64, 0.0f64);
     for _ in 0..n {
         let u = Vec2::new(rng.next_f32(), rng.next_f32());
-        let v = bsdf.sample(wo, rng.next_f32(), u, mode).map_or(0.0, |s| {
-            f64::from(crate::math::luminance(s.f) * s.wi.z.abs() / s.pdf)
-        });
+        let v = bsdf
+            .sample(wo, rng.next_f32(), u, mode)
+            .map_or(0.0, |s| f64::from(crate::math::luminance(s.f) * s.wi.z.abs() / s.pdf));
         sum += v;
         sum2 += v * v;
     }
     let mean = sum / n as f64;
-    (
-        mean,
-        ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt(),
-    )
+    (mean, ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt())
 }
 
 #[test]
@@ -191,78 +126,23 @@ fn white_furnace_energy_is_at_most_one() {
     let coat = PlasticCoat::new(1.5, false);
     let (eta, k) = fresnel::conductor_from_reflectance(Rgb::ONE);
     let white: Vec<(&str, Bsdf, f64)> = vec![
-        (
-            "diffuse",
-            Bsdf::Diffuse(Diffuse {
-                reflectance: Rgb::ONE,
-            }),
-            0.999,
-        ),
-        (
-            "conductor smooth",
-            Bsdf::Conductor(Conductor {
-                distribution: Ggx::isotropic(0.0),
-                eta,
-                k,
-            }),
-            0.99,
-        ),
-        (
-            "conductor rough",
-            Bsdf::Conductor(Conductor {
-                distribution: Ggx::isotropic(0.3),
-                eta,
-                k,
-            }),
-            0.8,
-        ),
-        (
-            "dielectric smooth",
-            Bsdf::Dielectric(Dielectric {
-                distribution: Ggx::isotropic(0.0),
-                eta: 1.5,
-            }),
-            0.999,
-        ),
-        (
-            "dielectric rough",
-            Bsdf::Dielectric(Dielectric {
-                distribution: Ggx::isotropic(0.3),
-                eta: 1.5,
-            }),
-            0.85,
-        ),
-        (
-            "plastic smooth",
-            Bsdf::Plastic(Plastic::new(Ggx::isotropic(0.0), &coat, Rgb::ONE, 1.0)),
-            0.95,
-        ),
-        (
-            "plastic rough",
-            Bsdf::Plastic(Plastic::new(Ggx::isotropic(0.3), &coat, Rgb::ONE, 1.0)),
-            0.9,
-        ),
+        ("diffuse", Bsdf::Diffuse(Diffuse { reflectance: Rgb::ONE }), 0.999),
+        ("conductor smooth", Bsdf::Conductor(Conductor { distribution: Ggx::isotropic(0.0), eta, k }), 0.99),
+        ("conductor rough", Bsdf::Conductor(Conductor { distribution: Ggx::isotropic(0.3), eta, k }), 0.8),
+        ("dielectric smooth", Bsdf::Dielectric(Dielectric { distribution: Ggx::isotropic(0.0), eta: 1.5 }), 0.999),
+        ("dielectric rough", Bsdf::Dielectric(Dielectric { distribution: Ggx::isotropic(0.3), eta: 1.5 }), 0.85),
+        ("plastic smooth", Bsdf::Plastic(Plastic::new(Ggx::isotropic(0.0), &coat, Rgb::ONE, 1.0)), 0.95),
+        ("plastic rough", Bsdf::Plastic(Plastic::new(Ggx::isotropic(0.3), &coat, Rgb::ONE, 1.0)), 0.9),
     ];
     // Lower bounds guard against lost energy: single-scattering GGX at alpha 0.3 loses about a
     // tenth at normal incidence (normals beyond 45° reflect below the horizon).
     for (name, bsdf, lower) in white {
-        for wo in [
-            dir(0.0, 0.0),
-            dir(45.0, 10.0),
-            dir(80.0, 100.0),
-            dir(150.0, 40.0),
-        ] {
+        for wo in [dir(0.0, 0.0), dir(45.0, 10.0), dir(80.0, 100.0), dir(150.0, 40.0)] {
             // Importance mode: no 1/η² radiance scaling, so energy conservation reads ≤ 1.
             let (mean, se) = albedo(&bsdf, wo, TransportMode::Importance, 200_000);
-            assert!(
-                mean <= 1.0 + 4.0 * se + 1e-3,
-                "{name}: albedo {mean} ± {se} exceeds one at {wo}"
-            );
+            assert!(mean <= 1.0 + 4.0 * se + 1e-3, "{name}: albedo {mean} ± {se} exceeds one at {wo}");
             if wo.z.abs() > 0.5 {
-                assert!(
-                    mean >= lower,
-                    "{name}: albedo {mean} implausibly low at {wo}"
-                );
+                assert!(mean >= lower, "{name}: albedo {mean} implausibly low at {wo}");
             }
         }
     }
@@ -270,19 +150,14 @@ fn white_furnace_energy_is_at_most_one() {
 
 #[test]
 fn smooth_dielectric_chooses_lobes_by_fresnel() {
-    let bsdf = Bsdf::Dielectric(Dielectric {
-        distribution: Ggx::isotropic(0.0),
-        eta: 1.5,
-    });
+    let bsdf = Bsdf::Dielectric(Dielectric { distribution: Ggx::isotropic(0.0), eta: 1.5 });
     let wo = dir(50.0, 0.0);
     let want = fresnel::dielectric(wo.z, 1.5);
     let mut rng = Pcg32::new(8, 8);
     let n = 100_000;
     let mut reflected = 0;
     for _ in 0..n {
-        let s = bsdf
-            .sample(wo, rng.next_f32(), Vec2::ZERO, TransportMode::Radiance)
-            .unwrap();
+        let s = bsdf.sample(wo, rng.next_f32(), Vec2::ZERO, TransportMode::Radiance).unwrap();
         assert!(s.delta);
         if !s.transmission {
             reflected += 1;

@@ -27,19 +27,8 @@ impl CameraDesc {
         let dir = (target - eye).normalize();
         let right = up.normalize().cross(dir).normalize();
         let new_up = dir.cross(right);
-        let camera_to_world = Mat4::from_cols(
-            right.extend(0.0),
-            new_up.extend(0.0),
-            dir.extend(0.0),
-            eye.extend(1.0),
-        );
-        Self {
-            camera_to_world,
-            fov_degrees,
-            lens_radius: 0.0,
-            focal_distance: 1.0,
-            screen_window: None,
-        }
+        let camera_to_world = Mat4::from_cols(right.extend(0.0), new_up.extend(0.0), dir.extend(0.0), eye.extend(1.0));
+        Self { camera_to_world, fov_degrees, lens_radius: 0.0, focal_distance: 1.0, screen_window: None }
     }
 
     pub fn build(&self, width: u32, height: u32) -> PerspectiveCamera {
@@ -83,32 +72,21 @@ impl PerspectiveCamera {
     }
 
     fn lens_area(&self) -> f32 {
-        if self.lens_radius > 0.0 {
-            PI * self.lens_radius * self.lens_radius
-        } else {
-            1.0
-        }
+        if self.lens_radius > 0.0 { PI * self.lens_radius * self.lens_radius } else { 1.0 }
     }
 
     /// Camera-space point on the `z = 1` plane for a raster position.
     fn raster_to_plane(&self, raster: Vec2) -> Vec3 {
         let (w, h) = (self.resolution.0 as f32, self.resolution.1 as f32);
         let [x0, x1, y0, y1] = self.window;
-        Vec3::new(
-            x0 + raster.x / w * (x1 - x0),
-            y1 - raster.y / h * (y1 - y0),
-            1.0,
-        )
+        Vec3::new(x0 + raster.x / w * (x1 - x0), y1 - raster.y / h * (y1 - y0), 1.0)
     }
 
     /// Raster position of a camera-space direction through the `z = 1` plane, if on the film.
     fn plane_to_raster(&self, p: Vec3) -> Option<Vec2> {
         let (w, h) = (self.resolution.0 as f32, self.resolution.1 as f32);
         let [x0, x1, y0, y1] = self.window;
-        let r = Vec2::new(
-            (p.x / p.z - x0) / (x1 - x0) * w,
-            (y1 - p.y / p.z) / (y1 - y0) * h,
-        );
+        let r = Vec2::new((p.x / p.z - x0) / (x1 - x0) * w, (y1 - p.y / p.z) / (y1 - y0) * h);
         (r.x >= 0.0 && r.x < w && r.y >= 0.0 && r.y < h).then_some(r)
     }
 
@@ -122,10 +100,7 @@ impl PerspectiveCamera {
         } else {
             (Vec3::ZERO, dir)
         };
-        Ray::new(
-            self.camera_to_world.transform_point3(o),
-            self.camera_to_world.transform_vector3(d).normalize(),
-        )
+        Ray::new(self.camera_to_world.transform_point3(o), self.camera_to_world.transform_vector3(d).normalize())
     }
 
     fn forward(&self) -> Vec3 {
@@ -140,17 +115,10 @@ impl PerspectiveCamera {
         if cos <= 0.0 {
             return None;
         }
-        let t = if self.lens_radius > 0.0 {
-            self.focal_distance
-        } else {
-            1.0
-        } / cos;
+        let t = if self.lens_radius > 0.0 { self.focal_distance } else { 1.0 } / cos;
         let raster = self.plane_to_raster(o + d * t)?;
         let cos2 = cos * cos;
-        Some((
-            Rgb::splat(1.0 / (self.image_area * self.lens_area() * cos2 * cos2)),
-            raster,
-        ))
+        Some((Rgb::splat(1.0 / (self.image_area * self.lens_area() * cos2 * cos2)), raster))
     }
 
     pub fn pdf_we(&self, ray: &Ray) -> (f32, f32) {
@@ -160,25 +128,16 @@ impl PerspectiveCamera {
         if cos <= 0.0 {
             return (0.0, 0.0);
         }
-        let t = if self.lens_radius > 0.0 {
-            self.focal_distance
-        } else {
-            1.0
-        } / cos;
+        let t = if self.lens_radius > 0.0 { self.focal_distance } else { 1.0 } / cos;
         if self.plane_to_raster(o + d * t).is_none() {
             return (0.0, 0.0);
         }
-        (
-            1.0 / self.lens_area(),
-            1.0 / (self.image_area * cos * cos * cos),
-        )
+        (1.0 / self.lens_area(), 1.0 / (self.image_area * cos * cos * cos))
     }
 
     pub fn sample_wi(&self, reference: Vec3, u: Vec2) -> Option<CameraSample> {
         let lens = concentric_disk(u) * self.lens_radius;
-        let p_lens = self
-            .camera_to_world
-            .transform_point3(Vec3::new(lens.x, lens.y, 0.0));
+        let p_lens = self.camera_to_world.transform_point3(Vec3::new(lens.x, lens.y, 0.0));
         let delta = p_lens - reference;
         let dist = delta.length();
         if dist == 0.0 {
@@ -188,14 +147,7 @@ impl PerspectiveCamera {
         let (importance, raster) = self.we(&Ray::new(p_lens, -wi))?;
         let cos = self.forward().dot(wi).abs();
         let pdf = dist * dist / (cos * self.lens_area());
-        Some(CameraSample {
-            wi,
-            dist,
-            p_lens,
-            importance,
-            pdf,
-            raster,
-        })
+        Some(CameraSample { wi, dist, p_lens, importance, pdf, raster })
     }
 }
 
@@ -205,12 +157,7 @@ mod tests {
     use crate::math::rng::Pcg32;
 
     fn cameras() -> Vec<PerspectiveCamera> {
-        let mut desc = CameraDesc::look_at(
-            Vec3::new(1.0, 2.0, -5.0),
-            Vec3::new(0.0, 0.5, 0.0),
-            Vec3::Y,
-            40.0,
-        );
+        let mut desc = CameraDesc::look_at(Vec3::new(1.0, 2.0, -5.0), Vec3::new(0.0, 0.5, 0.0), Vec3::Y, 40.0);
         let pinhole = desc.build(64, 48);
         desc.lens_radius = 0.1;
         desc.focal_distance = 4.0;
@@ -229,10 +176,7 @@ mod tests {
                 cam.generate_ray(Vec2::new(0.0, h as f32 / 2.0), Vec2::ZERO)
             };
             let angle = short_axis_edge.d.dot(Vec3::Z).acos().to_degrees();
-            assert!(
-                (angle - 45.0).abs() < 1e-3,
-                "half fov on the short axis: {angle}"
-            );
+            assert!((angle - 45.0).abs() < 1e-3, "half fov on the short axis: {angle}");
         }
     }
 
@@ -247,11 +191,7 @@ mod tests {
                 let ray = cam.generate_ray(raster, u);
                 let p = ray.at(0.5 + 10.0 * rng.next_f32());
                 let s = cam.sample_wi(p, u).expect("visible point maps back");
-                assert!(
-                    (s.raster - raster).length() < 2e-2,
-                    "{raster} -> {}",
-                    s.raster
-                );
+                assert!((s.raster - raster).length() < 2e-2, "{raster} -> {}", s.raster);
                 assert!((s.p_lens - ray.o).length() < 1e-4);
                 let (we, r2) = cam.we(&ray).unwrap();
                 assert!((we - s.importance).abs().max_element() < 1e-3 * we.x);

@@ -22,9 +22,7 @@ fn gaussian(x: f32, sigma: f32) -> f32 {
 impl Filter {
     pub fn radius(&self) -> f32 {
         match *self {
-            Filter::Box { radius }
-            | Filter::Triangle { radius }
-            | Filter::Gaussian { radius, .. } => radius,
+            Filter::Box { radius } | Filter::Triangle { radius } | Filter::Gaussian { radius, .. } => radius,
         }
     }
 
@@ -38,9 +36,7 @@ impl Filter {
                 }
             }
             Filter::Triangle { radius } => (radius - x.abs()).max(0.0),
-            Filter::Gaussian { radius, sigma } => {
-                (gaussian(x, sigma) - gaussian(radius, sigma)).max(0.0)
-            }
+            Filter::Gaussian { radius, sigma } => (gaussian(x, sigma) - gaussian(radius, sigma)).max(0.0),
         }
     }
 

@@ -19,11 +19,7 @@ pub struct FilmDesc {
 
 impl Default for FilmDesc {
     fn default() -> Self {
-        Self {
-            width: 512,
-            height: 512,
-            filter: Filter::default(),
-        }
+        Self { width: 512, height: 512, filter: Filter::default() }
     }
 }
 
@@ -42,12 +38,7 @@ impl FilmDesc {
         let mut tiles = Vec::new();
         for y0 in (0..self.height).step_by(size as usize) {
             for x0 in (0..self.width).step_by(size as usize) {
-                tiles.push(Tile {
-                    x0,
-                    y0,
-                    x1: (x0 + size).min(self.width),
-                    y1: (y0 + size).min(self.height),
-                });
+                tiles.push(Tile { x0, y0, x1: (x0 + size).min(self.width), y1: (y0 + size).min(self.height) });
             }
         }
         tiles
@@ -105,9 +96,7 @@ impl TileBuffer {
         let hi_y = ((p.y - 0.5 + r).floor() as i64).min(self.y0 + self.height - 1);
         for y in lo_y..=hi_y {
             for x in lo_x..=hi_x {
-                let w = self
-                    .filter
-                    .eval(p.x - (x as f32 + 0.5), p.y - (y as f32 + 0.5));
+                let w = self.filter.eval(p.x - (x as f32 + 0.5), p.y - (y as f32 + 0.5));
                 if w == 0.0 {
                     continue;
                 }
@@ -132,11 +121,7 @@ pub struct Film {
 
 impl Film {
     pub fn new(desc: FilmDesc) -> Self {
-        Self {
-            desc,
-            sums: vec![[0.0; 4]; (desc.width * desc.height) as usize],
-            invalid_samples: 0,
-        }
+        Self { desc, sums: vec![[0.0; 4]; (desc.width * desc.height) as usize], invalid_samples: 0 }
     }
 
     /// Adds a tile's sums. Merging tiles in a fixed order makes the result deterministic.
@@ -144,8 +129,7 @@ impl Film {
         for y in 0..tile.height {
             for x in 0..tile.width {
                 let src = &tile.sums[(y * tile.width + x) as usize];
-                let dst = &mut self.sums
-                    [((tile.y0 + y) * i64::from(self.desc.width) + tile.x0 + x) as usize];
+                let dst = &mut self.sums[((tile.y0 + y) * i64::from(self.desc.width) + tile.x0 + x) as usize];
                 for c in 0..4 {
                     dst[c] += src[c];
                 }
@@ -161,11 +145,7 @@ impl Film {
             .iter()
             .map(|s| {
                 if s[3] > 0.0 {
-                    Rgb::new(
-                        (s[0] / s[3]) as f32,
-                        (s[1] / s[3]) as f32,
-                        (s[2] / s[3]) as f32,
-                    )
+                    Rgb::new((s[0] / s[3]) as f32, (s[1] / s[3]) as f32, (s[2] / s[3]) as f32)
                 } else {
                     Rgb::ZERO
                 }
@@ -181,24 +161,14 @@ mod tests {
 
     #[test]
     fn box_filter_averages_within_the_pixel() {
-        let desc = FilmDesc {
-            width: 4,
-            height: 2,
-            filter: Filter::default(),
-        };
+        let desc = FilmDesc { width: 4, height: 2, filter: Filter::default() };
         let mut film = Film::new(desc);
         for tile in desc.tiles(2) {
             let mut buf = TileBuffer::new(&desc, tile);
             for y in tile.y0..tile.y1 {
                 for x in tile.x0..tile.x1 {
-                    buf.add_sample(
-                        Vec2::new(x as f32 + 0.25, y as f32 + 0.5),
-                        Rgb::splat(x as f32),
-                    );
-                    buf.add_sample(
-                        Vec2::new(x as f32 + 0.75, y as f32 + 0.5),
-                        Rgb::splat(x as f32 + 1.0),
-                    );
+                    buf.add_sample(Vec2::new(x as f32 + 0.25, y as f32 + 0.5), Rgb::splat(x as f32));
+                    buf.add_sample(Vec2::new(x as f32 + 0.75, y as f32 + 0.5), Rgb::splat(x as f32 + 1.0));
                 }
             }
             film.merge(&buf);
@@ -210,14 +180,7 @@ mod tests {
 
     #[test]
     fn wide_filters_reach_neighbours_across_tiles_and_invalid_samples_are_black() {
-        let desc = FilmDesc {
-            width: 4,
-            height: 4,
-            filter: Filter::Gaussian {
-                radius: 1.5,
-                sigma: 0.5,
-            },
-        };
+        let desc = FilmDesc { width: 4, height: 4, filter: Filter::Gaussian { radius: 1.5, sigma: 0.5 } };
         let mut film = Film::new(desc);
         let tiles = desc.tiles(2);
         let mut buf = TileBuffer::new(&desc, tiles[0]);
@@ -225,11 +188,7 @@ mod tests {
         buf.add_sample(Vec2::new(0.5, 0.5), Rgb::new(f32::NAN, 0.0, 0.0));
         film.merge(&buf);
         let img = film.develop();
-        assert_eq!(
-            img.get(2, 2),
-            Rgb::ONE,
-            "sample reaches the next tile's pixel"
-        );
+        assert_eq!(img.get(2, 2), Rgb::ONE, "sample reaches the next tile's pixel");
         assert!(img.get(0, 0).is_finite());
         assert_eq!(film.invalid_samples, 1);
     }

@@ -19,12 +19,7 @@ pub struct Disk {
 
 impl Disk {
     pub fn new(center: Vec3, normal: Vec3, radius: f32) -> Self {
-        Self {
-            center,
-            frame: Frame::from_z(normal.normalize()),
-            radius,
-            reverse_orientation: false,
-        }
+        Self { center, frame: Frame::from_z(normal.normalize()), radius, reverse_orientation: false }
     }
 
     pub fn area(&self) -> f32 {
@@ -56,32 +51,15 @@ impl Disk {
         };
         let uv = Vec2::new(phi / (2.0 * PI), 1.0 - dist / self.radius);
         let p = self.center + self.frame.s * local.x + self.frame.t * local.y;
-        let n = if self.reverse_orientation {
-            -self.frame.n
-        } else {
-            self.frame.n
-        };
+        let n = if self.reverse_orientation { -self.frame.n } else { self.frame.n };
         let dpdu = self.frame.to_world(Vec3::new(-local.y, local.x, 0.0)) * 2.0 * PI;
-        let dpdu = if dpdu.length_squared() > 0.0 {
-            dpdu
-        } else {
-            self.frame.s
-        };
-        SurfacePoint {
-            p,
-            ng: n,
-            ns: n,
-            uv,
-            dpdu,
-        }
+        let dpdu = if dpdu.length_squared() > 0.0 { dpdu } else { self.frame.s };
+        SurfacePoint { p, ng: n, ns: n, uv, dpdu }
     }
 
     pub fn sample_area(&self, u: Vec2) -> ShapeSample {
         let d = concentric_disk(u) * self.radius;
         let p = self.center + self.frame.s * d.x + self.frame.t * d.y;
-        ShapeSample {
-            point: self.surface(p),
-            pdf: 1.0 / self.area(),
-        }
+        ShapeSample { point: self.surface(p), pdf: 1.0 / self.area() }
     }
 }

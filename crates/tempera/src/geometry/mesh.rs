@@ -10,11 +10,7 @@ pub enum MeshError {
     #[error("vertex index {index} out of range (mesh has {count} vertices)")]
     IndexOutOfRange { index: u32, count: usize },
     #[error("{what} has {got} entries but the mesh has {want} vertices")]
-    AttributeCount {
-        what: &'static str,
-        got: usize,
-        want: usize,
-    },
+    AttributeCount { what: &'static str, got: usize, want: usize },
     #[error("non-finite vertex position")]
     NonFinite,
 }
@@ -48,28 +44,14 @@ impl TriangleMesh {
         if let Some(n) = &normals
             && n.len() != count
         {
-            return Err(MeshError::AttributeCount {
-                what: "normals",
-                got: n.len(),
-                want: count,
-            });
+            return Err(MeshError::AttributeCount { what: "normals", got: n.len(), want: count });
         }
         if let Some(uv) = &uvs
             && uv.len() != count
         {
-            return Err(MeshError::AttributeCount {
-                what: "uvs",
-                got: uv.len(),
-                want: count,
-            });
+            return Err(MeshError::AttributeCount { what: "uvs", got: uv.len(), want: count });
         }
-        Ok(Self {
-            positions,
-            normals,
-            uvs,
-            indices,
-            reverse_orientation: false,
-        })
+        Ok(Self { positions, normals, uvs, indices, reverse_orientation: false })
     }
 
     /// Transforms the mesh in place (normals by the inverse transpose). A transform that swaps
@@ -92,11 +74,7 @@ impl TriangleMesh {
     #[inline]
     pub fn vertices(&self, tri: u32) -> [Vec3; 3] {
         let [a, b, c] = self.indices[tri as usize];
-        [
-            self.positions[a as usize],
-            self.positions[b as usize],
-            self.positions[c as usize],
-        ]
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
     }
 
     pub fn area(&self, tri: u32) -> f32 {
@@ -107,11 +85,7 @@ impl TriangleMesh {
     fn uvs_of(&self, tri: u32) -> [Vec2; 3] {
         match &self.uvs {
             Some(uv) => self.indices[tri as usize].map(|i| uv[i as usize]),
-            None => [
-                Vec2::new(0.0, 0.0),
-                Vec2::new(1.0, 0.0),
-                Vec2::new(1.0, 1.0),
-            ],
+            None => [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)],
         }
     }
 
@@ -128,11 +102,7 @@ impl TriangleMesh {
         let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
         let (dp02, dp12) = (p0 - p2, p1 - p2);
         let det = duv02.x * duv12.y - duv02.y * duv12.x;
-        let mut dpdu = if det.abs() < 1e-12 {
-            Vec3::ZERO
-        } else {
-            (duv12.y * dp02 - duv02.y * dp12) / det
-        };
+        let mut dpdu = if det.abs() < 1e-12 { Vec3::ZERO } else { (duv12.y * dp02 - duv02.y * dp12) / det };
         if !dpdu.is_finite() {
             dpdu = Vec3::ZERO;
         }
@@ -152,13 +122,7 @@ impl TriangleMesh {
                 (ng, ng)
             }
         };
-        SurfacePoint {
-            p,
-            ng,
-            ns,
-            uv: uv_hit,
-            dpdu,
-        }
+        SurfacePoint { p, ng, ns, uv: uv_hit, dpdu }
     }
 
     /// Uniform area sample on triangle `tri`: the surface point and the area density.
@@ -179,12 +143,7 @@ mod tests {
             Vec3::new(2.0, 1.0, 0.0),
             Vec3::new(0.0, 1.0, 0.0),
         ];
-        let uv = vec![
-            Vec2::new(0.0, 0.0),
-            Vec2::new(1.0, 0.0),
-            Vec2::new(1.0, 1.0),
-            Vec2::new(0.0, 1.0),
-        ];
+        let uv = vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
         TriangleMesh::new(p, vec![[0, 1, 2], [0, 2, 3]], None, Some(uv)).unwrap()
     }
 
@@ -195,10 +154,7 @@ mod tests {
         assert!((s.p - Vec3::new(1.5, 0.25, 0.0)).length() < 1e-6);
         assert!((s.uv - Vec2::new(0.75, 0.25)).length() < 1e-6);
         assert_eq!(s.ng, Vec3::Z, "counter-clockwise faces +z");
-        assert!(
-            (s.dpdu - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-5,
-            "dp/du follows the uv layout"
-        );
+        assert!((s.dpdu - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-5, "dp/du follows the uv layout");
         m.reverse_orientation = true;
         assert_eq!(m.surface(0, Vec3::splat(1.0 / 3.0)).ng, -Vec3::Z);
         // Shading normals win over the winding: the geometric normal is flipped towards them.
@@ -213,11 +169,7 @@ mod tests {
     fn mirroring_transforms_flip_orientation_and_area_sampling_is_uniform_density() {
         let mut m = quad();
         m.transform(&Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)));
-        assert_eq!(
-            m.surface(0, Vec3::splat(1.0 / 3.0)).ng,
-            Vec3::Z,
-            "the mirrored winding is compensated"
-        );
+        assert_eq!(m.surface(0, Vec3::splat(1.0 / 3.0)).ng, Vec3::Z, "the mirrored winding is compensated");
         assert!((m.area(0) - 1.0).abs() < 1e-6);
         let (s, pdf) = m.sample(1, Vec2::new(0.3, 0.8));
         assert_eq!(pdf, 1.0);
@@ -231,11 +183,7 @@ mod tests {
             TriangleMesh::new(p.clone(), vec![[0, 1, 3]], None, None).unwrap_err(),
             MeshError::IndexOutOfRange { index: 3, count: 3 }
         );
-        assert!(
-            TriangleMesh::new(p.clone(), vec![[0, 1, 2]], Some(vec![Vec3::Z; 2]), None).is_err()
-        );
-        assert!(
-            TriangleMesh::new(vec![Vec3::splat(f32::NAN); 3], vec![[0, 1, 2]], None, None).is_err()
-        );
+        assert!(TriangleMesh::new(p.clone(), vec![[0, 1, 2]], Some(vec![Vec3::Z; 2]), None).is_err());
+        assert!(TriangleMesh::new(vec![Vec3::splat(f32::NAN); 3], vec![[0, 1, 2]], None, None).is_err());
     }
 }

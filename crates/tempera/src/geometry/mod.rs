@@ -76,17 +76,10 @@ impl Geometry {
             .iter()
             .enumerate()
             .flat_map(|(s, shape)| {
-                (0..shape.primitive_count() as u32).map(move |index| PrimRef {
-                    shape: s as u32,
-                    index,
-                })
+                (0..shape.primitive_count() as u32).map(move |index| PrimRef { shape: s as u32, index })
             })
             .collect();
-        let mut g = Self {
-            shapes,
-            prims,
-            triangles: Vec::new(),
-        };
+        let mut g = Self { shapes, prims, triangles: Vec::new() };
         g.cache_triangles();
         g
     }
@@ -110,10 +103,7 @@ impl Geometry {
                 let [a, b, c] = m.vertices(r.index);
                 (a.min(b).min(c), a.max(b).max(c))
             }
-            Shape::Sphere(s) => (
-                s.center - Vec3::splat(s.radius),
-                s.center + Vec3::splat(s.radius),
-            ),
+            Shape::Sphere(s) => (s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
             Shape::Disk(d) => {
                 let n = d.frame.n;
                 let ext = Vec3::new(
@@ -128,18 +118,10 @@ impl Geometry {
 
     /// Intersects primitive `i`, returning the distance and hit parameters.
     #[inline]
-    pub fn intersect_prim(
-        &self,
-        i: u32,
-        ray: &Ray,
-        shear: &RayShear,
-        t_max: f32,
-    ) -> Option<(f32, Vec3)> {
+    pub fn intersect_prim(&self, i: u32, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<(f32, Vec3)> {
         let r = self.prims[i as usize];
         match &self.shapes[r.shape as usize] {
-            Shape::Mesh(m) => {
-                intersect_triangle(ray, shear, m.vertices(r.index), t_max).map(|h| (h.t, h.b))
-            }
+            Shape::Mesh(m) => intersect_triangle(ray, shear, m.vertices(r.index), t_max).map(|h| (h.t, h.b)),
             Shape::Sphere(s) => s.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
             Shape::Disk(d) => d.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
         }
@@ -183,10 +165,7 @@ impl Geometry {
         if d2 == 0.0 || cos.is_nan() || cos <= 0.0 {
             return None;
         }
-        Some(ShapeSample {
-            point: area_sample.point,
-            pdf: area_sample.pdf * d2 / cos,
-        })
+        Some(ShapeSample { point: area_sample.point, pdf: area_sample.pdf * d2 / cos })
     }
 
     /// Solid-angle density of [`Self::sample_from`] for the point `hit` on primitive `i`.
@@ -206,13 +185,10 @@ impl Geometry {
 
     /// Bounding box of everything.
     pub fn world_bounds(&self) -> (Vec3, Vec3) {
-        (0..self.prims.len()).fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), i| {
-                let (a, b) = self.bounds(i);
-                (lo.min(a), hi.max(b))
-            },
-        )
+        (0..self.prims.len()).fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), i| {
+            let (a, b) = self.bounds(i);
+            (lo.min(a), hi.max(b))
+        })
     }
 
     /// Reorders the primitive table (the accelerator stores primitives in its own order).

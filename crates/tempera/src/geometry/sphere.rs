@@ -72,22 +72,13 @@ impl Sphere {
             dpdu = Frame::from_z(n).s;
         }
         let n = if self.reverse_orientation { -n } else { n };
-        SurfacePoint {
-            p,
-            ng: n,
-            ns: n,
-            uv,
-            dpdu,
-        }
+        SurfacePoint { p, ng: n, ns: n, uv, dpdu }
     }
 
     /// Uniform sample over the whole surface, density per unit area.
     pub fn sample_area(&self, u: Vec2) -> ShapeSample {
         let p = self.center + self.radius * uniform_sphere(u);
-        ShapeSample {
-            point: self.surface(p),
-            pdf: 1.0 / self.area(),
-        }
+        ShapeSample { point: self.surface(p), pdf: 1.0 / self.area() }
     }
 
     /// Samples the cone of directions subtended by the sphere from `reference`; the density is
@@ -103,10 +94,7 @@ impl Sphere {
             if d2 == 0.0 || cos == 0.0 {
                 return None;
             }
-            return Some(ShapeSample {
-                point: s.point,
-                pdf: s.pdf * d2 / cos,
-            });
+            return Some(ShapeSample { point: s.point, pdf: s.pdf * d2 / cos });
         }
         let sin2_max = r2 / dc2;
         let sin_max = sin2_max.sqrt();
@@ -127,10 +115,7 @@ impl Sphere {
         let frame = Frame::from_z((self.center - reference).normalize());
         let n = frame.to_world(-w);
         let point = self.surface(self.center + n * self.radius);
-        Some(ShapeSample {
-            point,
-            pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
-        })
+        Some(ShapeSample { point, pdf: 1.0 / (2.0 * PI * one_minus_cos_max) })
     }
 
     /// Solid-angle density of [`Self::sample_from`] for a direction that hits the sphere at `hit`.
@@ -140,19 +125,11 @@ impl Sphere {
         if dc2 <= r2 * 1.0001 {
             let w = hit.p - reference;
             let cos = hit.ng.dot(w.normalize_or_zero()).abs();
-            return if cos == 0.0 {
-                0.0
-            } else {
-                w.length_squared() / (cos * self.area())
-            };
+            return if cos == 0.0 { 0.0 } else { w.length_squared() / (cos * self.area()) };
         }
         let sin2_max = r2 / dc2;
         let cos_max = safe_sqrt(1.0 - sin2_max);
-        let one_minus = if sin2_max < 0.000_685_23 {
-            sin2_max / 2.0
-        } else {
-            1.0 - cos_max
-        };
+        let one_minus = if sin2_max < 0.000_685_23 { sin2_max / 2.0 } else { 1.0 - cos_max };
         1.0 / (2.0 * PI * one_minus)
     }
 }

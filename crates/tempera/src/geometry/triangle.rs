@@ -28,14 +28,7 @@ impl RayShear {
         let kx = (kz + 1) % 3;
         let ky = (kx + 1) % 3;
         let d = ray.d;
-        Self {
-            kx,
-            ky,
-            kz,
-            sx: -d[kx] / d[kz],
-            sy: -d[ky] / d[kz],
-            sz: 1.0 / d[kz],
-        }
+        Self { kx, ky, kz, sx: -d[kx] / d[kz], sy: -d[ky] / d[kz], sz: 1.0 / d[kz] }
     }
 }
 
@@ -48,20 +41,8 @@ pub struct TriangleHit {
 
 /// Intersects `ray` with triangle `(p0, p1, p2)` for `0 < t < t_max`.
 #[inline]
-pub fn intersect_triangle(
-    ray: &Ray,
-    shear: &RayShear,
-    p: [Vec3; 3],
-    t_max: f32,
-) -> Option<TriangleHit> {
-    let RayShear {
-        kx,
-        ky,
-        kz,
-        sx,
-        sy,
-        sz,
-    } = *shear;
+pub fn intersect_triangle(ray: &Ray, shear: &RayShear, p: [Vec3; 3], t_max: f32) -> Option<TriangleHit> {
+    let RayShear { kx, ky, kz, sx, sy, sz } = *shear;
     let rel = p.map(|v| v - ray.o);
     let mut q = rel.map(|v| Vec3::new(v[kx], v[ky], v[kz]));
     for v in q.iter_mut() {
@@ -72,9 +53,7 @@ pub fn intersect_triangle(
     let mut e1 = q[2].x * q[0].y - q[2].y * q[0].x;
     let mut e2 = q[0].x * q[1].y - q[0].y * q[1].x;
     if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-        let f = |a: Vec3, b: Vec3| {
-            (f64::from(a.x) * f64::from(b.y) - f64::from(a.y) * f64::from(b.x)) as f32
-        };
+        let f = |a: Vec3, b: Vec3| (f64::from(a.x) * f64::from(b.y) - f64::from(a.y) * f64::from(b.x)) as f32;
         e0 = f(q[1], q[2]);
         e1 = f(q[2], q[0]);
         e2 = f(q[0], q[1]);
@@ -99,10 +78,7 @@ pub fn intersect_triangle(
     if !(t > 0.0 && t < t_max) {
         return None;
     }
-    Some(TriangleHit {
-        t,
-        b: Vec3::new(e0, e1, e2) * inv_det,
-    })
+    Some(TriangleHit { t, b: Vec3::new(e0, e1, e2) * inv_det })
 }
 
 #[cfg(test)]
@@ -112,11 +88,7 @@ mod tests {
 
     #[test]
     fn hits_inside_and_misses_outside() {
-        let tri = [
-            Vec3::new(0.0, 0.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-        ];
+        let tri = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
         let h = intersect_triangle(&ray, &RayShear::new(&ray), tri, f32::INFINITY).unwrap();
         assert!((h.t - 1.0).abs() < 1e-6);
@@ -130,16 +102,8 @@ mod tests {
     #[test]
     fn shared_edges_are_watertight() {
         // Two triangles sharing a diagonal: rays through the diagonal must hit at least one.
-        let a = [
-            Vec3::new(0.0, 0.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-        ];
-        let b = [
-            Vec3::new(0.0, 0.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-        ];
+        let a = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0)];
+        let b = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
         let mut rng = Pcg32::new(11, 0);
         for _ in 0..20_000 {
             let s = rng.next_f32();

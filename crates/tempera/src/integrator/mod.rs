@@ -60,12 +60,7 @@ pub struct RenderOutput {
 /// A light-transport algorithm.
 pub trait Integrator: Send + Sync {
     fn name(&self) -> &'static str;
-    fn render(
-        &self,
-        scene: &Scene,
-        settings: &RenderSettings,
-        control: &RenderControl,
-    ) -> RenderOutput;
+    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput;
 }
 
 /// Names accepted by [`create`].

@@ -23,10 +23,7 @@ pub struct PathIntegrator {
 
 impl PathIntegrator {
     pub fn new(max_depth: u32) -> Self {
-        Self {
-            max_depth,
-            next_event: true,
-        }
+        Self { max_depth, next_event: true }
     }
 }
 
@@ -84,11 +81,7 @@ impl PixelEstimator for PathIntegrator {
     fn li<S: Sampler>(&self, scene: &Scene, mut ray: Ray, sampler: &mut S, rays: &mut u64) -> Rgb {
         let mut l = Rgb::ZERO;
         let mut beta = Rgb::ONE;
-        let mut prev = PrevVertex {
-            p: ray.o,
-            bsdf_pdf: 0.0,
-            specular: true,
-        };
+        let mut prev = PrevVertex { p: ray.o, bsdf_pdf: 0.0, specular: true };
         let mut depth = 0u32;
         sampler.start_stream(Stream::Camera);
         loop {
@@ -100,10 +93,7 @@ impl PixelEstimator for PathIntegrator {
                     let w = if prev.specular {
                         1.0
                     } else {
-                        power_heuristic(
-                            prev.bsdf_pdf,
-                            scene.light_sampler.pmf(i as usize) * light.pdf_li_dir(ray.d),
-                        )
+                        power_heuristic(prev.bsdf_pdf, scene.light_sampler.pmf(i as usize) * light.pdf_li_dir(ray.d))
                     };
                     l += beta * le * w;
                 }
@@ -139,11 +129,7 @@ impl PixelEstimator for PathIntegrator {
             if !beta.is_finite() || beta.max_element() <= 0.0 {
                 break;
             }
-            prev = PrevVertex {
-                p: it.surface.p,
-                bsdf_pdf: bs.pdf,
-                specular: bs.delta,
-            };
+            prev = PrevVertex { p: it.surface.p, bsdf_pdf: bs.pdf, specular: bs.delta };
             ray = spawn_ray(it.surface.p, it.surface.ng, bs.wi);
             if depth > RR_DEPTH {
                 let q = (1.0 - beta.max_element()).max(0.0);
@@ -162,12 +148,7 @@ impl Integrator for PathIntegrator {
         "path"
     }
 
-    fn render(
-        &self,
-        scene: &Scene,
-        settings: &RenderSettings,
-        control: &RenderControl,
-    ) -> RenderOutput {
+    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
         render_tiles(self, scene, settings, control)
     }
 }

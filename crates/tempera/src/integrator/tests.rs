@@ -15,19 +15,8 @@ pub(crate) fn render_with(
     threads: usize,
 ) -> RenderOutput {
     let cancel = AtomicBool::new(false);
-    let control = RenderControl {
-        cancel: &cancel,
-        on_progress: &|_| {},
-    };
-    integrator.render(
-        scene,
-        &RenderSettings {
-            budget,
-            seed,
-            threads,
-        },
-        &control,
-    )
+    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    integrator.render(scene, &RenderSettings { budget, seed, threads }, &control)
 }
 
 /// Mean and standard error of the mean of a set of independent per-pixel estimates.
@@ -50,12 +39,7 @@ fn classify_furnace_pixels(scene: &Scene) -> (Vec<usize>, Vec<usize>) {
     for y in 0..h {
         for x in 0..w {
             let (fx, fy) = (x as f32, y as f32);
-            let corners = [
-                hits(fx, fy),
-                hits(fx + 1.0, fy),
-                hits(fx, fy + 1.0),
-                hits(fx + 1.0, fy + 1.0),
-            ];
+            let corners = [hits(fx, fy), hits(fx + 1.0, fy), hits(fx, fy + 1.0), hits(fx + 1.0, fy + 1.0)];
             let i = (y * w + x) as usize;
             if corners.iter().all(|&c| c) {
                 sphere.push(i);
@@ -71,10 +55,7 @@ fn check_furnace(integrator: &dyn Integrator, spp: u32) {
     let scene = crate::scenes::furnace(0.8, 48, 48).build().unwrap();
     let out = render_with(&scene, integrator, Budget::Samples(spp), 1, 0);
     let (sphere, sky) = classify_furnace_pixels(&scene);
-    assert!(
-        sphere.len() > 200 && sky.len() > 200,
-        "the furnace camera must see both sphere and sky"
-    );
+    assert!(sphere.len() > 200 && sky.len() > 200, "the furnace camera must see both sphere and sky");
     for &i in &sky {
         assert!(
             (out.image.pixels[i] - Rgb::ONE).abs().max_element() < 1e-5,
@@ -83,10 +64,7 @@ fn check_furnace(integrator: &dyn Integrator, spp: u32) {
         );
     }
     for c in 0..3 {
-        let values: Vec<f64> = sphere
-            .iter()
-            .map(|&i| f64::from(out.image.pixels[i][c]))
-            .collect();
+        let values: Vec<f64> = sphere.iter().map(|&i| f64::from(out.image.pixels[i][c])).collect();
         let (mean, se) = mean_and_se(&values);
         assert!(
             (mean - 0.8).abs() < 4.0 * se + 1e-4,
@@ -110,37 +88,18 @@ use crate::math::Rgb;
 fn maxdepth_zero_shows_only_emitters() {
     let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
     let out = render_with(&scene, &PathIntegrator::new(0), Budget::Samples(4), 3, 0);
-    let lit: Vec<usize> = (0..out.image.pixels.len())
-        .filter(|&i| out.image.pixels[i].max_element() > 0.0)
-        .collect();
-    assert!(
-        !lit.is_empty() && lit.len() < 40,
-        "only the small light may be visible, {} pixels lit",
-        lit.len()
-    );
-    assert!(
-        lit.iter().all(|&i| i / 32 < 6),
-        "lit pixels must be the ceiling light at the top of the frame"
-    );
+    let lit: Vec<usize> = (0..out.image.pixels.len()).filter(|&i| out.image.pixels[i].max_element() > 0.0).collect();
+    assert!(!lit.is_empty() && lit.len() < 40, "only the small light may be visible, {} pixels lit", lit.len());
+    assert!(lit.iter().all(|&i| i / 32 < 6), "lit pixels must be the ceiling light at the top of the frame");
     // The light faces down: the ceiling beside it needs two scattering events (ceiling, then
     // a lit wall or floor), the floor only one.
     let ceiling = |img: &crate::texture::Image| img.get(3, 1).max_element();
     let floor = |img: &crate::texture::Image| img.get(16, 30).max_element();
     let one = render_with(&scene, &PathIntegrator::new(1), Budget::Samples(16), 3, 0);
-    assert_eq!(
-        ceiling(&one.image),
-        0.0,
-        "maxdepth 1: no light reaches the ceiling"
-    );
-    assert!(
-        floor(&one.image) > 0.0,
-        "maxdepth 1: direct light on the floor"
-    );
+    assert_eq!(ceiling(&one.image), 0.0, "maxdepth 1: no light reaches the ceiling");
+    assert!(floor(&one.image) > 0.0, "maxdepth 1: direct light on the floor");
     let two = render_with(&scene, &PathIntegrator::new(2), Budget::Samples(16), 3, 0);
-    assert!(
-        ceiling(&two.image) > 0.0,
-        "maxdepth 2: indirect light on the ceiling"
-    );
+    assert!(ceiling(&two.image) > 0.0, "maxdepth 2: indirect light on the ceiling");
 }
 
 #[test]
@@ -155,32 +114,16 @@ fn same_seed_is_bit_identical_at_any_thread_count() {
     assert!(a.image.pixels == b.image.pixels && b.image.pixels == c.image.pixels);
     assert_eq!(a.stats.rays, b.stats.rays);
     let d = render_with(&scene, &integrator, Budget::Samples(6), 12, 2);
-    assert!(
-        a.image.pixels != d.image.pixels,
-        "a different seed must change the image"
-    );
+    assert!(a.image.pixels != d.image.pixels, "a different seed must change the image");
 }
 
 #[test]
 fn time_budget_renders_every_pixel_and_cancellation_stops_early() {
     let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
     let integrator = PathIntegrator::new(5);
-    let out = render_with(
-        &scene,
-        &integrator,
-        Budget::Time(std::time::Duration::from_millis(200)),
-        1,
-        0,
-    );
+    let out = render_with(&scene, &integrator, Budget::Time(std::time::Duration::from_millis(200)), 1, 0);
     assert!(out.stats.spp_completed >= 1);
-    assert!(
-        out.image
-            .pixels
-            .iter()
-            .filter(|p| p.max_element() > 0.0)
-            .count()
-            > 1000
-    );
+    assert!(out.image.pixels.iter().filter(|p| p.max_element() > 0.0).count() > 1000);
 
     let cancel = AtomicBool::new(false);
     let done = AtomicU64::new(0);
@@ -189,31 +132,13 @@ fn time_budget_renders_every_pixel_and_cancellation_stops_early() {
             cancel.store(true, Ordering::Relaxed);
         }
     };
-    let control = RenderControl {
-        cancel: &cancel,
-        on_progress: &on_progress,
-    };
-    let settings = RenderSettings {
-        budget: Budget::Samples(1 << 20),
-        seed: 1,
-        threads: 2,
-    };
+    let control = RenderControl { cancel: &cancel, on_progress: &on_progress };
+    let settings = RenderSettings { budget: Budget::Samples(1 << 20), seed: 1, threads: 2 };
     let out = integrator.render(&scene, &settings, &control);
     assert!(out.stats.cancelled);
-    assert!(
-        out.stats.pixel_samples < 32 * 32 * 64,
-        "stopped long before the budget"
-    );
+    assert!(out.stats.pixel_samples < 32 * 32 * 64, "stopped long before the budget");
     assert!(out.image.pixels.iter().all(|p| p.is_finite()));
-    assert!(
-        out.image
-            .pixels
-            .iter()
-            .filter(|p| p.max_element() > 0.0)
-            .count()
-            > 1000,
-        "what was rendered is kept"
-    );
+    assert!(out.image.pixels.iter().filter(|p| p.max_element() > 0.0).count() > 1000, "what was rendered is kept");
 }
 
 /// Per-block means of an image and their standard errors (pixels as independent estimates).
@@ -237,18 +162,12 @@ fn block_stats(img: &crate::texture::Image, block: usize) -> Vec<(f64, f64)> {
 fn next_event_estimation_agrees_with_bsdf_sampling_on_a_cornell_box() {
     let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
     let mis = render_with(&scene, &PathIntegrator::new(5), Budget::Samples(128), 5, 0);
-    let bsdf_only = PathIntegrator {
-        max_depth: 5,
-        next_event: false,
-    };
+    let bsdf_only = PathIntegrator { max_depth: 5, next_event: false };
     let plain = render_with(&scene, &bsdf_only, Budget::Samples(512), 6, 0);
     let (a, b) = (block_stats(&mis.image, 8), block_stats(&plain.image, 8));
     for (i, ((ma, sa), (mb, sb))) in a.iter().zip(&b).enumerate() {
         let se = (sa * sa + sb * sb).sqrt();
-        assert!(
-            (ma - mb).abs() < 4.5 * se + 1e-3,
-            "block {i}: MIS {ma} vs BSDF-only {mb} (se {se})"
-        );
+        assert!((ma - mb).abs() < 4.5 * se + 1e-3, "block {i}: MIS {ma} vs BSDF-only {mb} (se {se})");
     }
     let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
     let (ma, mb) = (mean(&a), mean(&b));

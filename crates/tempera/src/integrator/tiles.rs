@@ -41,8 +41,7 @@ struct Pass<'a> {
 
 impl Pass<'_> {
     fn should_stop(&self) -> bool {
-        self.control.cancel.load(Ordering::Relaxed)
-            || self.deadline.is_some_and(|d| Instant::now() >= d)
+        self.control.cancel.load(Ordering::Relaxed) || self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 
     fn render_tile<E: PixelEstimator>(&self, estimator: &E, tile: Tile) -> TileResult {
@@ -58,8 +57,7 @@ impl Pass<'_> {
             for x in tile.x0..tile.x1 {
                 let pixel = u64::from(y) * u64::from(film.width) + u64::from(x);
                 for s in self.samples.clone() {
-                    let mut sampler =
-                        IndependentSampler::for_pixel_sample(self.seed, pixel, u64::from(s));
+                    let mut sampler = IndependentSampler::for_pixel_sample(self.seed, pixel, u64::from(s));
                     sampler.start_stream(Stream::Camera);
                     let film_u = sampler.next_2d();
                     let lens_u = sampler.next_2d();
@@ -72,12 +70,7 @@ impl Pass<'_> {
             }
             (self.control.on_progress)(u64::from(tile.x1 - tile.x0) * self.samples.len() as u64);
         }
-        TileResult {
-            buffer,
-            rays,
-            samples,
-            stopped,
-        }
+        TileResult { buffer, rays, samples, stopped }
     }
 }
 
@@ -110,17 +103,11 @@ pub fn render_tiles<E: PixelEstimator>(
             deadline: if done == 0 { None } else { deadline },
             control,
         };
-        if control.cancel.load(Ordering::Relaxed)
-            || pass.deadline.is_some_and(|d| Instant::now() >= d)
-        {
+        if control.cancel.load(Ordering::Relaxed) || pass.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        let results: Vec<TileResult> = pool.install(|| {
-            tiles
-                .par_iter()
-                .map(|&t| pass.render_tile(estimator, t))
-                .collect()
-        });
+        let results: Vec<TileResult> =
+            pool.install(|| tiles.par_iter().map(|&t| pass.render_tile(estimator, t)).collect());
         let mut stopped = false;
         for r in &results {
             film.merge(&r.buffer);
@@ -137,8 +124,5 @@ pub fn render_tiles<E: PixelEstimator>(
     stats.invalid_samples = film.invalid_samples;
     stats.cancelled = control.cancel.load(Ordering::Relaxed);
     stats.seconds = start.elapsed().as_secs_f64();
-    RenderOutput {
-        image: film.develop(),
-        stats,
-    }
+    RenderOutput { image: film.develop(), stats }
 }

@@ -7,8 +7,7 @@
 use super::LightSample;
 use crate::math::distribution::Distribution2D;
 use crate::math::warp::{
-    UNIFORM_SPHERE_PDF, equal_area_sphere_to_square, equal_area_square_to_sphere, spherical_phi,
-    uniform_sphere,
+    UNIFORM_SPHERE_PDF, equal_area_sphere_to_square, equal_area_square_to_sphere, spherical_phi, uniform_sphere,
 };
 use crate::math::{Mat3, Rgb, Vec2, Vec3, luminance};
 use crate::texture::Image;
@@ -41,12 +40,7 @@ pub struct InfiniteLight {
 impl InfiniteLight {
     /// Constant radiance from every direction.
     pub fn uniform(radiance: Rgb) -> Self {
-        Self {
-            to_world: Mat3::IDENTITY,
-            to_local: Mat3::IDENTITY,
-            scale: radiance,
-            image: None,
-        }
+        Self { to_world: Mat3::IDENTITY, to_local: Mat3::IDENTITY, scale: radiance, image: None }
     }
 
     /// An image map in the given parametrisation; `to_world` is a rotation, `scale` multiplies it.
@@ -64,24 +58,12 @@ impl InfiniteLight {
             .collect();
         let distribution = Distribution2D::new(&values, w, h);
         let to_local = to_world.inverse();
-        Self {
-            to_world,
-            to_local,
-            scale,
-            image: Some(ImageEnvironment {
-                image,
-                map,
-                distribution,
-            }),
-        }
+        Self { to_world, to_local, scale, image: Some(ImageEnvironment { image, map, distribution }) }
     }
 
     fn dir_to_uv(map: EnvironmentMap, d: Vec3) -> Vec2 {
         match map {
-            EnvironmentMap::LatLong => Vec2::new(
-                spherical_phi(d) / (2.0 * PI),
-                d.z.clamp(-1.0, 1.0).acos() / PI,
-            ),
+            EnvironmentMap::LatLong => Vec2::new(spherical_phi(d) / (2.0 * PI), d.z.clamp(-1.0, 1.0).acos() / PI),
             EnvironmentMap::EqualArea => equal_area_sphere_to_square(d),
         }
     }
@@ -90,17 +72,9 @@ impl InfiniteLight {
         match map {
             EnvironmentMap::LatLong => {
                 let (theta, phi) = (uv.y * PI, uv.x * 2.0 * PI);
-                let d = Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.sin() * phi.sin(),
-                    theta.cos(),
-                );
+                let d = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
                 let sin_theta = theta.sin();
-                let jacobian = if sin_theta > 0.0 {
-                    1.0 / (2.0 * PI * PI * sin_theta)
-                } else {
-                    0.0
-                };
+                let jacobian = if sin_theta > 0.0 { 1.0 / (2.0 * PI * PI * sin_theta) } else { 0.0 };
                 (d, jacobian)
             }
             EnvironmentMap::EqualArea => (equal_area_square_to_sphere(uv), 1.0 / (4.0 * PI)),
@@ -134,14 +108,7 @@ impl InfiniteLight {
                 ((self.to_world * d).normalize(), pdf_uv * jacobian)
             }
         };
-        Some(LightSample {
-            li: self.le(wi),
-            wi,
-            p: reference + wi * 1e7,
-            dist: f32::INFINITY,
-            pdf,
-            delta: false,
-        })
+        Some(LightSample { li: self.le(wi), wi, p: reference + wi * 1e7, dist: f32::INFINITY, pdf, delta: false })
     }
 
     /// Solid-angle density of [`Self::sample_li`].
@@ -154,11 +121,7 @@ impl InfiniteLight {
                 let jacobian = match env.map {
                     EnvironmentMap::LatLong => {
                         let sin_theta = (1.0 - d.z * d.z).max(0.0).sqrt();
-                        if sin_theta > 0.0 {
-                            1.0 / (2.0 * PI * PI * sin_theta)
-                        } else {
-                            0.0
-                        }
+                        if sin_theta > 0.0 { 1.0 / (2.0 * PI * PI * sin_theta) } else { 0.0 }
                     }
                     EnvironmentMap::EqualArea => 1.0 / (4.0 * PI),
                 };

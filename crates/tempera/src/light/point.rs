@@ -21,14 +21,7 @@ impl PointLight {
             return None;
         }
         let dist = d2.sqrt();
-        Some(LightSample {
-            li: self.intensity / d2,
-            wi: delta / dist,
-            p: self.position,
-            dist,
-            pdf: 1.0,
-            delta: true,
-        })
+        Some(LightSample { li: self.intensity / d2, wi: delta / dist, p: self.position, dist, pdf: 1.0, delta: true })
     }
 
     pub fn power(&self) -> f32 {
@@ -57,13 +50,7 @@ fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
 impl SpotLight {
     /// A spotlight at `position` pointing at `target`; `cone_angle` is the half-angle of the
     /// full cone, `cone_delta` the width of the falloff band (degrees, as in pbrt).
-    pub fn new(
-        position: Vec3,
-        target: Vec3,
-        intensity: Rgb,
-        cone_angle: f32,
-        cone_delta: f32,
-    ) -> Self {
+    pub fn new(position: Vec3, target: Vec3, intensity: Rgb, cone_angle: f32, cone_delta: f32) -> Self {
         let axis = (target - position).normalize();
         Self {
             position,
@@ -76,12 +63,7 @@ impl SpotLight {
 
     /// Intensity in world direction `w` leaving the light.
     pub fn i(&self, w: Vec3) -> Rgb {
-        self.intensity
-            * smoothstep(
-                self.cos_falloff_end,
-                self.cos_falloff_start,
-                w.dot(self.frame.n),
-            )
+        self.intensity * smoothstep(self.cos_falloff_end, self.cos_falloff_start, w.dot(self.frame.n))
     }
 
     pub fn sample_li(&self, reference: Vec3) -> Option<LightSample> {
@@ -92,21 +74,11 @@ impl SpotLight {
         }
         let dist = d2.sqrt();
         let wi = delta / dist;
-        Some(LightSample {
-            li: self.i(-wi) / d2,
-            wi,
-            p: self.position,
-            dist,
-            pdf: 1.0,
-            delta: true,
-        })
+        Some(LightSample { li: self.i(-wi) / d2, wi, p: self.position, dist, pdf: 1.0, delta: true })
     }
 
     pub fn power(&self) -> f32 {
-        luminance(self.intensity)
-            * 2.0
-            * PI
-            * (1.0 - 0.5 * (self.cos_falloff_start + self.cos_falloff_end))
+        luminance(self.intensity) * 2.0 * PI * (1.0 - 0.5 * (self.cos_falloff_start + self.cos_falloff_end))
     }
 }
 

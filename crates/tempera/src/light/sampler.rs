@@ -11,10 +11,7 @@ pub struct LightSampler {
 impl LightSampler {
     /// From per-light powers; all-zero powers fall back to uniform selection.
     pub fn new(powers: &[f32]) -> Self {
-        Self {
-            distribution: Distribution1D::new(powers),
-            count: powers.len(),
-        }
+        Self { distribution: Distribution1D::new(powers), count: powers.len() }
     }
 
     /// Chooses a light: `(index, probability)`, or `None` when the scene has no lights.
@@ -29,10 +26,6 @@ impl LightSampler {
 
     #[inline]
     pub fn pmf(&self, light: usize) -> f32 {
-        if self.count == 0 {
-            0.0
-        } else {
-            self.distribution.discrete_pdf(light)
-        }
+        if self.count == 0 { 0.0 } else { self.distribution.discrete_pdf(light) }
     }
 }

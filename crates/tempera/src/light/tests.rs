@@ -11,11 +11,7 @@ use std::sync::Arc;
 
 fn emitter_geometry() -> Geometry {
     let tri = TriangleMesh::new(
-        vec![
-            Vec3::new(-1.0, 2.0, -0.5),
-            Vec3::new(1.5, 2.5, 0.0),
-            Vec3::new(0.0, 1.5, 1.5),
-        ],
+        vec![Vec3::new(-1.0, 2.0, -0.5), Vec3::new(1.5, 2.5, 0.0), Vec3::new(0.0, 1.5, 1.5)],
         vec![[0, 1, 2]],
         None,
         None,
@@ -23,21 +19,9 @@ fn emitter_geometry() -> Geometry {
     .unwrap();
     Geometry::new(vec![
         Shape::Mesh(tri),
-        Shape::Sphere(Sphere {
-            center: Vec3::new(0.5, 0.3, 2.0),
-            radius: 0.7,
-            reverse_orientation: false,
-        }),
-        Shape::Disk(Disk::new(
-            Vec3::new(-1.0, -1.0, 0.5),
-            Vec3::new(0.3, 1.0, 0.2),
-            0.8,
-        )),
-        Shape::Sphere(Sphere {
-            center: Vec3::new(0.0, 0.0, 0.0),
-            radius: 3.0,
-            reverse_orientation: true,
-        }),
+        Shape::Sphere(Sphere { center: Vec3::new(0.5, 0.3, 2.0), radius: 0.7, reverse_orientation: false }),
+        Shape::Disk(Disk::new(Vec3::new(-1.0, -1.0, 0.5), Vec3::new(0.3, 1.0, 0.2), 0.8)),
+        Shape::Sphere(Sphere { center: Vec3::new(0.0, 0.0, 0.0), radius: 3.0, reverse_orientation: true }),
     ])
 }
 
@@ -55,12 +39,7 @@ fn area_pdf(geometry: &Geometry, light: &AreaLight, reference: Vec3, w: Vec3) ->
 }
 
 fn light_on(prim: u32) -> AreaLight {
-    AreaLight {
-        prim,
-        radiance: Rgb::ONE.into(),
-        scale: 1.0,
-        two_sided: true,
-    }
+    AreaLight { prim, radiance: Rgb::ONE.into(), scale: 1.0, two_sided: true }
 }
 
 const REFERENCE: Vec3 = Vec3::new(0.1, -0.2, 0.05);
@@ -72,10 +51,7 @@ fn sphere_light_cone_sampling_matches_pdf() {
     let (center, radius) = (Vec3::new(0.5, 0.3, 2.0), 0.7f64);
     let axis = (center - REFERENCE).normalize();
     let sin2 = radius * radius / f64::from((center - REFERENCE).length_squared());
-    let binning = Binning::Cap {
-        frame: Frame::from_z(axis),
-        cos_min: (1.0 - sin2).sqrt(),
-    };
+    let binning = Binning::Cap { frame: Frame::from_z(axis), cos_min: (1.0 - sin2).sqrt() };
     let r = chi2_directions(
         binning,
         300_000,
@@ -97,10 +73,7 @@ fn sphere_light_sampled_from_inside_matches_pdf() {
         |u, _| light.sample_li(&geometry, REFERENCE, u).map(|s| s.wi),
         |w| area_pdf(&geometry, &light, REFERENCE, w),
     );
-    assert!(
-        r.p_value > 1e-4 && (r.pdf_integral - 1.0).abs() < 0.01,
-        "inside sphere: {r:?}"
-    );
+    assert!(r.p_value > 1e-4 && (r.pdf_integral - 1.0).abs() < 0.01, "inside sphere: {r:?}");
 }
 
 /// Samples points on `light` and bins them in a parametrisation where uniform area sampling
@@ -116,18 +89,9 @@ fn area_domain_p_value(
     let mut counts = vec![0u64; grid * grid];
     let n = expected.iter().sum::<f64>().round() as usize;
     for _ in 0..n {
-        let s = light
-            .sample_li(
-                geometry,
-                REFERENCE,
-                Vec2::new(rng.next_f32(), rng.next_f32()),
-            )
-            .unwrap();
+        let s = light.sample_li(geometry, REFERENCE, Vec2::new(rng.next_f32(), rng.next_f32())).unwrap();
         let q = to_unit(s.p);
-        let (i, j) = (
-            ((q.x * grid as f32) as usize).min(grid - 1),
-            ((q.y * grid as f32) as usize).min(grid - 1),
-        );
+        let (i, j) = (((q.x * grid as f32) as usize).min(grid - 1), ((q.y * grid as f32) as usize).min(grid - 1));
         counts[j * grid + i] += 1;
     }
     chi2_p_value(&counts, expected)
@@ -144,13 +108,9 @@ fn triangle_and_disk_lights_sample_area_uniformly() {
     };
     let barycentric = |p: Vec3| {
         let (v0, v1, v2) = (p1 - p0, p2 - p0, p - p0);
-        let (d00, d01, d11, d20, d21) =
-            (v0.dot(v0), v0.dot(v1), v1.dot(v1), v2.dot(v0), v2.dot(v1));
+        let (d00, d01, d11, d20, d21) = (v0.dot(v0), v0.dot(v1), v1.dot(v1), v2.dot(v0), v2.dot(v1));
         let denom = d00 * d11 - d01 * d01;
-        Vec2::new(
-            (d11 * d20 - d01 * d21) / denom,
-            (d00 * d21 - d01 * d20) / denom,
-        )
+        Vec2::new((d11 * d20 - d01 * d21) / denom, (d00 * d21 - d01 * d20) / denom)
     };
     let expected: Vec<f64> = (0..grid * grid)
         .map(|k| {
@@ -167,16 +127,11 @@ fn triangle_and_disk_lights_sample_area_uniformly() {
     assert!(p > 1e-4, "triangle area sampling: p = {p:e}");
 
     // Disk: (r/R)² and φ/2π are uniform.
-    let Shape::Disk(disk) = geometry.shapes[2] else {
-        unreachable!()
-    };
+    let Shape::Disk(disk) = geometry.shapes[2] else { unreachable!() };
     let polar = |p: Vec3| {
         let l = disk.frame.to_local(p - disk.center);
         let phi = crate::math::warp::spherical_phi(Vec3::new(l.x, l.y, 0.0));
-        Vec2::new(
-            (l.x * l.x + l.y * l.y) / (disk.radius * disk.radius),
-            phi / (2.0 * std::f32::consts::PI),
-        )
+        Vec2::new((l.x * l.x + l.y * l.y) / (disk.radius * disk.radius), phi / (2.0 * std::f32::consts::PI))
     };
     let expected = vec![n / (grid * grid) as f64; grid * grid];
     let p = area_domain_p_value(&geometry, &light_on(2), polar, &expected, grid);
@@ -198,17 +153,14 @@ fn area_to_solid_angle_conversion_recovers_the_subtended_solid_angle() {
         2.0 * num.atan2(den)
     };
     let expected_disk = {
-        let Shape::Disk(d) = geometry.shapes[2] else {
-            unreachable!()
-        };
+        let Shape::Disk(d) = geometry.shapes[2] else { unreachable!() };
         let (nr, np) = (400, 400);
         let mut sum = 0.0f64;
         for i in 0..nr {
             let r = (f64::from(i) + 0.5) / f64::from(nr) * f64::from(d.radius);
             for j in 0..np {
                 let phi = (f64::from(j) + 0.5) / f64::from(np) * std::f64::consts::TAU;
-                let p = d.center.as_dvec3()
-                    + (d.frame.s.as_dvec3() * phi.cos() + d.frame.t.as_dvec3() * phi.sin()) * r;
+                let p = d.center.as_dvec3() + (d.frame.s.as_dvec3() * phi.cos() + d.frame.t.as_dvec3() * phi.sin()) * r;
                 let w = p - REFERENCE.as_dvec3();
                 sum += d.frame.n.as_dvec3().dot(w).abs() / w.length().powi(3) * r;
             }
@@ -225,24 +177,12 @@ fn area_to_solid_angle_conversion_recovers_the_subtended_solid_angle() {
         let n = 200_000;
         let mut sum = 0.0f64;
         for _ in 0..n {
-            let s = light
-                .sample_li(
-                    &geometry,
-                    REFERENCE,
-                    Vec2::new(rng.next_f32(), rng.next_f32()),
-                )
-                .unwrap();
-            assert!(
-                (f64::from(s.pdf) - area_pdf(&geometry, &light, REFERENCE, s.wi)).abs()
-                    < 1e-3 * f64::from(s.pdf)
-            );
+            let s = light.sample_li(&geometry, REFERENCE, Vec2::new(rng.next_f32(), rng.next_f32())).unwrap();
+            assert!((f64::from(s.pdf) - area_pdf(&geometry, &light, REFERENCE, s.wi)).abs() < 1e-3 * f64::from(s.pdf));
             sum += 1.0 / f64::from(s.pdf);
         }
         let got = sum / f64::from(n);
-        assert!(
-            (got - want).abs() < 0.01 * want,
-            "primitive {prim}: solid angle {got} vs {want}"
-        );
+        assert!((got - want).abs() < 0.01 * want, "primitive {prim}: solid angle {got} vs {want}");
     }
 }
 
@@ -251,11 +191,7 @@ fn test_image() -> Arc<Image> {
     let pixels = (0..w * h)
         .map(|i| {
             let (x, y) = (i % w, i / w);
-            let hot = if (x, y) == (5, 3) || (x, y) == (20, 12) {
-                200.0
-            } else {
-                0.0
-            };
+            let hot = if (x, y) == (5, 3) || (x, y) == (20, 12) { 200.0 } else { 0.0 };
             Rgb::new(0.1 + x as f32 * 0.02 + hot, 0.2, 0.05 + y as f32 * 0.03)
         })
         .collect();
@@ -277,16 +213,8 @@ fn environment_sampling_matches_pdf() {
             |u, _| light.sample_li(Vec3::ZERO, u).map(|s| s.wi),
             |w| f64::from(light.pdf_dir(w)),
         );
-        assert!(
-            r.p_value > 1e-4,
-            "environment {i}: chi-square p = {:e}",
-            r.p_value
-        );
-        assert!(
-            (r.pdf_integral - 1.0).abs() < 0.01,
-            "environment {i}: ∫pdf = {}",
-            r.pdf_integral
-        );
+        assert!(r.p_value > 1e-4, "environment {i}: chi-square p = {:e}", r.p_value);
+        assert!((r.pdf_integral - 1.0).abs() < 0.01, "environment {i}: ∫pdf = {}", r.pdf_integral);
         // The sampled radiance is what an escaping ray in that direction sees, and the density
         // is proportional to it (up to the parametrisation's Jacobian).
         let s = light.sample_li(Vec3::ZERO, Vec2::new(0.3, 0.6)).unwrap();
@@ -307,24 +235,13 @@ fn light_selection_follows_power() {
 #[test]
 fn one_sided_area_lights_emit_on_the_normal_side_only() {
     let geometry = emitter_geometry();
-    let disk_light = AreaLight {
-        prim: 2,
-        radiance: Rgb::ONE.into(),
-        scale: 2.0,
-        two_sided: false,
-    };
+    let disk_light = AreaLight { prim: 2, radiance: Rgb::ONE.into(), scale: 2.0, two_sided: false };
     let n = Vec3::new(0.3, 1.0, 0.2).normalize();
     let front = Vec3::new(-1.0, -1.0, 0.5) + n * 2.0;
     let back = Vec3::new(-1.0, -1.0, 0.5) - n * 2.0;
     let u = Vec2::new(0.4, 0.4);
-    assert_eq!(
-        disk_light.sample_li(&geometry, front, u).unwrap().li,
-        Rgb::splat(2.0)
-    );
-    assert_eq!(
-        disk_light.sample_li(&geometry, back, u).unwrap().li,
-        Rgb::ZERO
-    );
+    assert_eq!(disk_light.sample_li(&geometry, front, u).unwrap().li, Rgb::splat(2.0));
+    assert_eq!(disk_light.sample_li(&geometry, back, u).unwrap().li, Rgb::ZERO);
 }
 
 #[test]
@@ -344,38 +261,16 @@ fn textured_area_light_radiance_follows_uv() {
     let radiance = Texture::Checkerboard(Box::new(Checkerboard {
         even: Rgb::new(4.0, 0.0, 0.0).into(),
         odd: Rgb::new(0.0, 0.0, 2.0).into(),
-        mapping: UvMapping {
-            su: 2.0,
-            sv: 1.0,
-            du: 0.0,
-            dv: 0.0,
-        },
+        mapping: UvMapping { su: 2.0, sv: 1.0, du: 0.0, dv: 0.0 },
     }));
-    let light = AreaLight {
-        prim: 2,
-        radiance,
-        scale: 0.5,
-        two_sided: true,
-    };
+    let light = AreaLight { prim: 2, radiance, scale: 0.5, two_sided: true };
     let mut seen = [false; 2];
     let mut rng = crate::math::rng::Pcg32::new(1, 2);
     for _ in 0..200 {
-        let s = light
-            .sample_li(
-                &geometry,
-                REFERENCE,
-                Vec2::new(rng.next_f32(), rng.next_f32()),
-            )
-            .unwrap();
-        let Shape::Disk(d) = geometry.shapes[2] else {
-            unreachable!()
-        };
+        let s = light.sample_li(&geometry, REFERENCE, Vec2::new(rng.next_f32(), rng.next_f32())).unwrap();
+        let Shape::Disk(d) = geometry.shapes[2] else { unreachable!() };
         let u = d.surface(s.p).uv.x;
-        let want = if u < 0.5 {
-            Rgb::new(2.0, 0.0, 0.0)
-        } else {
-            Rgb::new(0.0, 0.0, 1.0)
-        };
+        let want = if u < 0.5 { Rgb::new(2.0, 0.0, 0.0) } else { Rgb::new(0.0, 0.0, 1.0) };
         assert_eq!(s.li, want);
         seen[usize::from(u >= 0.5)] = true;
     }

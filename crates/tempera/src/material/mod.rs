@@ -16,19 +16,11 @@ pub struct Roughness {
 
 impl Roughness {
     pub fn alpha(alpha: f32) -> Self {
-        Self {
-            u: alpha.into(),
-            v: alpha.into(),
-            remap: false,
-        }
+        Self { u: alpha.into(), v: alpha.into(), remap: false }
     }
 
     pub fn anisotropic(alpha_u: f32, alpha_v: f32) -> Self {
-        Self {
-            u: alpha_u.into(),
-            v: alpha_v.into(),
-            remap: false,
-        }
+        Self { u: alpha_u.into(), v: alpha_v.into(), remap: false }
     }
 
     #[inline]
@@ -78,12 +70,7 @@ pub struct CoatedDiffuseMaterial {
 
 impl CoatedDiffuseMaterial {
     pub fn new(reflectance: Texture, roughness: Roughness, eta: f32, nonlinear: bool) -> Self {
-        Self {
-            reflectance,
-            roughness,
-            specular: 1.0,
-            coat: PlasticCoat::new(eta, nonlinear),
-        }
+        Self { reflectance, roughness, specular: 1.0, coat: PlasticCoat::new(eta, nonlinear) }
     }
 }
 
@@ -97,40 +84,28 @@ pub enum Material {
 
 impl Material {
     pub fn diffuse(reflectance: impl Into<Texture>) -> Self {
-        Material::Diffuse(DiffuseMaterial {
-            reflectance: reflectance.into(),
-        })
+        Material::Diffuse(DiffuseMaterial { reflectance: reflectance.into() })
     }
 
     /// The BSDF at texture coordinates `uv`.
     pub fn bsdf(&self, uv: Vec2) -> Bsdf {
         match self {
-            Material::Diffuse(m) => Bsdf::Diffuse(Diffuse {
-                reflectance: m.reflectance.eval(uv).clamp(Rgb::ZERO, Rgb::ONE),
-            }),
+            Material::Diffuse(m) => {
+                Bsdf::Diffuse(Diffuse { reflectance: m.reflectance.eval(uv).clamp(Rgb::ZERO, Rgb::ONE) })
+            }
             Material::Conductor(m) => {
                 let (eta, k) = match &m.fresnel {
                     ConductorFresnel::Ior { eta, k } => (eta.eval(uv), k.eval(uv)),
-                    ConductorFresnel::Reflectance(r) => {
-                        fresnel::conductor_from_reflectance(r.eval(uv))
-                    }
+                    ConductorFresnel::Reflectance(r) => fresnel::conductor_from_reflectance(r.eval(uv)),
                 };
-                Bsdf::Conductor(Conductor {
-                    distribution: m.roughness.distribution(uv),
-                    eta,
-                    k,
-                })
+                Bsdf::Conductor(Conductor { distribution: m.roughness.distribution(uv), eta, k })
             }
-            Material::Dielectric(m) => Bsdf::Dielectric(Dielectric {
-                distribution: m.roughness.distribution(uv),
-                eta: m.eta,
-            }),
-            Material::CoatedDiffuse(m) => Bsdf::Plastic(Plastic::new(
-                m.roughness.distribution(uv),
-                &m.coat,
-                m.reflectance.eval(uv),
-                m.specular,
-            )),
+            Material::Dielectric(m) => {
+                Bsdf::Dielectric(Dielectric { distribution: m.roughness.distribution(uv), eta: m.eta })
+            }
+            Material::CoatedDiffuse(m) => {
+                Bsdf::Plastic(Plastic::new(m.roughness.distribution(uv), &m.coat, m.reflectance.eval(uv), m.specular))
+            }
         }
     }
 }

@@ -17,10 +17,7 @@ impl Distribution1D {
         let func: Vec<f32> = if values.is_empty() {
             vec![1.0]
         } else {
-            values
-                .iter()
-                .map(|&v| if v.is_finite() { v.max(0.0) } else { 0.0 })
-                .collect()
+            values.iter().map(|&v| if v.is_finite() { v.max(0.0) } else { 0.0 }).collect()
         };
         let n = func.len();
         let mut cdf = Vec::with_capacity(n + 1);
@@ -42,11 +39,7 @@ impl Distribution1D {
             *c /= integral;
         }
         cdf[n] = 1.0;
-        Self {
-            func,
-            cdf,
-            integral,
-        }
+        Self { func, cdf, integral }
     }
 
     pub fn len(&self) -> usize {
@@ -72,11 +65,7 @@ impl Distribution1D {
         let u = f64::from(u);
         let i = self.find_cell(u);
         let width = self.cdf[i + 1] - self.cdf[i];
-        let remapped = if width > 0.0 {
-            ((u - self.cdf[i]) / width) as f32
-        } else {
-            0.0
-        };
+        let remapped = if width > 0.0 { ((u - self.cdf[i]) / width) as f32 } else { 0.0 };
         (i, width as f32, remapped.clamp(0.0, 1.0 - f32::EPSILON))
     }
 
@@ -116,19 +105,10 @@ impl Distribution2D {
         let row_integrals: Vec<f32> = conditionals
             .iter()
             .zip(values.chunks(width))
-            .map(|(c, row)| {
-                if row.iter().any(|&v| v > 0.0) {
-                    c.integral() as f32
-                } else {
-                    0.0
-                }
-            })
+            .map(|(c, row)| if row.iter().any(|&v| v > 0.0) { c.integral() as f32 } else { 0.0 })
             .collect();
         let marginal = Distribution1D::new(&row_integrals);
-        Self {
-            conditionals,
-            marginal,
-        }
+        Self { conditionals, marginal }
     }
 
     /// Samples `(u, v)` in the unit square and returns it with its density.

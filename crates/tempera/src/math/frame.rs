@@ -30,11 +30,7 @@ impl Frame {
             return Self::from_z(n);
         }
         let s = s / len2.sqrt();
-        Self {
-            s,
-            t: n.cross(s),
-            n,
-        }
+        Self { s, t: n.cross(s), n }
     }
 
     #[inline]

@@ -14,10 +14,7 @@ const PCG_MULT: u64 = 0x5851_f42d_4c95_7f2d;
 impl Pcg32 {
     /// A generator at position `seed` of sequence `stream`.
     pub fn new(seed: u64, stream: u64) -> Self {
-        let mut rng = Self {
-            state: 0,
-            inc: (stream << 1) | 1,
-        };
+        let mut rng = Self { state: 0, inc: (stream << 1) | 1 };
         rng.next_u32();
         rng.state = rng.state.wrapping_add(seed);
         rng.next_u32();
@@ -59,9 +56,7 @@ pub fn mix64(mut z: u64) -> u64 {
 /// Hash a tuple of integers into one well-mixed 64-bit value.
 #[inline]
 pub fn hash(values: &[u64]) -> u64 {
-    values.iter().fold(0x9e37_79b9_7f4a_7c15, |acc, &v| {
-        mix64(acc ^ mix64(v.wrapping_add(0x9e37_79b9_7f4a_7c15)))
-    })
+    values.iter().fold(0x9e37_79b9_7f4a_7c15, |acc, &v| mix64(acc ^ mix64(v.wrapping_add(0x9e37_79b9_7f4a_7c15))))
 }
 
 #[cfg(test)]
@@ -84,12 +79,8 @@ mod tests {
 
     #[test]
     fn streams_and_hashes_differ() {
-        let a: Vec<u32> = (0..4)
-            .scan(Pcg32::new(1, 1), |r, _| Some(r.next_u32()))
-            .collect();
-        let b: Vec<u32> = (0..4)
-            .scan(Pcg32::new(1, 2), |r, _| Some(r.next_u32()))
-            .collect();
+        let a: Vec<u32> = (0..4).scan(Pcg32::new(1, 1), |r, _| Some(r.next_u32())).collect();
+        let b: Vec<u32> = (0..4).scan(Pcg32::new(1, 2), |r, _| Some(r.next_u32())).collect();
         assert_ne!(a, b);
         assert_ne!(hash(&[1, 2]), hash(&[2, 1]));
         assert_eq!(hash(&[5, 9]), hash(&[5, 9]));

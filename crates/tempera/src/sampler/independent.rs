@@ -11,9 +11,7 @@ pub struct IndependentSampler {
 
 impl IndependentSampler {
     pub fn new(seed: u64, stream: u64) -> Self {
-        Self {
-            rng: Pcg32::new(seed, stream),
-        }
+        Self { rng: Pcg32::new(seed, stream) }
     }
 
     /// The sampler of sample `sample` of pixel `pixel` in a render seeded with `seed`.

@@ -27,14 +27,15 @@ pub struct AreaEmission {
 pub struct RenderDefaults {
     pub spp: u32,
     pub max_depth: u32,
+    /// The integrator the scene asks for, in Tempera's names.
+    pub integrator: Option<String>,
+    /// The output file name the scene asks for.
+    pub output: Option<String>,
 }
 
 impl Default for RenderDefaults {
     fn default() -> Self {
-        Self {
-            spp: 16,
-            max_depth: 5,
-        }
+        Self { spp: 16, max_depth: 5, integrator: None, output: None }
     }
 }
 
@@ -43,11 +44,7 @@ pub enum SceneError {
     #[error("the scene has no camera")]
     NoCamera,
     #[error("shape {shape} uses material {material}, but only {count} materials exist")]
-    UnknownMaterial {
-        shape: usize,
-        material: u32,
-        count: usize,
-    },
+    UnknownMaterial { shape: usize, material: u32, count: usize },
     #[error("film resolution {0}x{1} is empty")]
     EmptyFilm(u32, u32),
     #[error("invalid shape {shape}: {reason}")]
@@ -77,12 +74,7 @@ impl SceneBuilder {
     }
 
     /// Adds a shape with a material and, optionally, area emission.
-    pub fn add_shape(
-        &mut self,
-        shape: Shape,
-        material: MaterialId,
-        emission: Option<AreaEmission>,
-    ) {
+    pub fn add_shape(&mut self, shape: Shape, material: MaterialId, emission: Option<AreaEmission>) {
         self.shapes.push(shape);
         self.shape_material.push(material.0);
         self.shape_emission.push(emission);
@@ -111,26 +103,17 @@ impl SceneBuilder {
         }
         for (shape, &material) in self.shape_material.iter().enumerate() {
             if material as usize >= self.materials.len() {
-                return Err(SceneError::UnknownMaterial {
-                    shape,
-                    material,
-                    count: self.materials.len(),
-                });
+                return Err(SceneError::UnknownMaterial { shape, material, count: self.materials.len() });
             }
         }
         for (i, shape) in self.shapes.iter().enumerate() {
             let bad = match shape {
-                Shape::Sphere(s) => {
-                    !(s.radius > 0.0 && s.radius.is_finite() && s.center.is_finite())
-                }
+                Shape::Sphere(s) => !(s.radius > 0.0 && s.radius.is_finite() && s.center.is_finite()),
                 Shape::Disk(d) => !(d.radius > 0.0 && d.radius.is_finite() && d.center.is_finite()),
                 Shape::Mesh(m) => m.positions.iter().any(|p| !p.is_finite()),
             };
             if bad {
-                return Err(SceneError::InvalidShape {
-                    shape: i,
-                    reason: "non-finite or non-positive size".into(),
-                });
+                return Err(SceneError::InvalidShape { shape: i, reason: "non-finite or non-positive size".into() });
             }
         }
         Ok(())
@@ -156,18 +139,10 @@ impl SceneBuilder {
                 }));
             }
         }
-        let radius = if bounds.0.is_finite() {
-            0.5 * (bounds.1 - bounds.0).length()
-        } else {
-            1.0
-        };
+        let radius = if bounds.0.is_finite() { 0.5 * (bounds.1 - bounds.0).length() } else { 1.0 };
         let powers: Vec<f32> = lights.iter().map(|l| l.power(&geometry, radius)).collect();
-        let infinite_lights = lights
-            .iter()
-            .enumerate()
-            .filter(|(_, l)| l.is_infinite())
-            .map(|(i, _)| i as u32)
-            .collect();
+        let infinite_lights =
+            lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
         Ok(Scene {
             geometry,
             accel,

@@ -97,11 +97,7 @@ impl Scene {
     /// Radius of the bounding sphere of the geometry.
     pub fn radius(&self) -> f32 {
         let (lo, hi) = self.bounds;
-        if lo.is_finite() && hi.is_finite() {
-            0.5 * (hi - lo).length()
-        } else {
-            1.0
-        }
+        if lo.is_finite() && hi.is_finite() { 0.5 * (hi - lo).length() } else { 1.0 }
     }
 
     /// Changes the film resolution, keeping the camera's field-of-view convention.

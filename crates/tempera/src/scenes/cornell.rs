@@ -17,46 +17,11 @@ pub(super) fn add_room(b: &mut SceneBuilder) {
     let green = b.add_material(Material::diffuse(Rgb::new(0.14, 0.45, 0.091)));
     let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
     let walls = [
-        (
-            quad(
-                v(-1., 0., -1.),
-                v(-1., 0., 1.),
-                v(1., 0., 1.),
-                v(1., 0., -1.),
-            ),
-            white,
-        ),
-        (
-            quad(
-                v(-1., 2., -1.),
-                v(1., 2., -1.),
-                v(1., 2., 1.),
-                v(-1., 2., 1.),
-            ),
-            white,
-        ),
-        (
-            quad(
-                v(-1., 0., -1.),
-                v(1., 0., -1.),
-                v(1., 2., -1.),
-                v(-1., 2., -1.),
-            ),
-            white,
-        ),
-        (
-            quad(v(1., 0., -1.), v(1., 0., 1.), v(1., 2., 1.), v(1., 2., -1.)),
-            red,
-        ),
-        (
-            quad(
-                v(-1., 0., -1.),
-                v(-1., 2., -1.),
-                v(-1., 2., 1.),
-                v(-1., 0., 1.),
-            ),
-            green,
-        ),
+        (quad(v(-1., 0., -1.), v(-1., 0., 1.), v(1., 0., 1.), v(1., 0., -1.)), white),
+        (quad(v(-1., 2., -1.), v(1., 2., -1.), v(1., 2., 1.), v(-1., 2., 1.)), white),
+        (quad(v(-1., 0., -1.), v(1., 0., -1.), v(1., 2., -1.), v(-1., 2., -1.)), white),
+        (quad(v(1., 0., -1.), v(1., 0., 1.), v(1., 2., 1.), v(1., 2., -1.)), red),
+        (quad(v(-1., 0., -1.), v(-1., 2., -1.), v(-1., 2., 1.), v(-1., 0., 1.)), green),
     ];
     for (shape, m) in walls {
         b.add_shape(shape, m, None);
@@ -73,24 +38,11 @@ pub(super) fn add_ceiling_light(b: &mut SceneBuilder, half: f32, z: f32, radianc
         Vec3::new(half, y, z + half),
         Vec3::new(-half, y, z + half),
     );
-    b.add_shape(
-        light,
-        black,
-        Some(AreaEmission {
-            radiance: radiance.into(),
-            scale: 1.0,
-            two_sided: false,
-        }),
-    );
+    b.add_shape(light, black, Some(AreaEmission { radiance: radiance.into(), scale: 1.0, two_sided: false }));
 }
 
 pub(super) fn room_camera(fov: f32) -> CameraDesc {
-    CameraDesc::look_at(
-        Vec3::new(0.0, 1.0, 3.9),
-        Vec3::new(0.0, 1.0, 0.0),
-        Vec3::Y,
-        fov,
-    )
+    CameraDesc::look_at(Vec3::new(0.0, 1.0, 3.9), Vec3::new(0.0, 1.0, 0.0), Vec3::Y, fov)
 }
 
 /// The classic diffuse Cornell box with two diffuse boxes replaced by a diffuse sphere.
@@ -100,24 +52,13 @@ pub fn cornell_box(width: u32, height: u32) -> SceneBuilder {
     add_ceiling_light(&mut b, 0.25, 0.0, Rgb::new(17.0, 12.0, 4.0));
     let white = b.add_material(Material::diffuse(Rgb::splat(0.73)));
     b.add_shape(
-        Shape::Sphere(Sphere {
-            center: Vec3::new(0.3, 0.4, -0.2),
-            radius: 0.4,
-            reverse_orientation: false,
-        }),
+        Shape::Sphere(Sphere { center: Vec3::new(0.3, 0.4, -0.2), radius: 0.4, reverse_orientation: false }),
         white,
         None,
     );
     b.set_camera(room_camera(38.0));
-    b.set_film(FilmDesc {
-        width,
-        height,
-        ..FilmDesc::default()
-    });
-    b.set_defaults(RenderDefaults {
-        spp: 64,
-        max_depth: 5,
-    });
+    b.set_film(FilmDesc { width, height, ..FilmDesc::default() });
+    b.set_defaults(RenderDefaults { spp: 64, max_depth: 5, ..RenderDefaults::default() });
     b
 }
 
@@ -126,30 +67,10 @@ pub fn cornell_box(width: u32, height: u32) -> SceneBuilder {
 pub fn furnace(albedo: f32, width: u32, height: u32) -> SceneBuilder {
     let mut b = SceneBuilder::new();
     let m = b.add_material(Material::diffuse(Rgb::splat(albedo)));
-    b.add_shape(
-        Shape::Sphere(Sphere {
-            center: Vec3::ZERO,
-            radius: 1.0,
-            reverse_orientation: false,
-        }),
-        m,
-        None,
-    );
+    b.add_shape(Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, reverse_orientation: false }), m, None);
     b.add_light(Light::Infinite(InfiniteLight::uniform(Rgb::ONE)));
-    b.set_camera(CameraDesc::look_at(
-        Vec3::new(0.0, 0.0, 4.0),
-        Vec3::ZERO,
-        Vec3::Y,
-        40.0,
-    ));
-    b.set_film(FilmDesc {
-        width,
-        height,
-        ..FilmDesc::default()
-    });
-    b.set_defaults(RenderDefaults {
-        spp: 16,
-        max_depth: 8,
-    });
+    b.set_camera(CameraDesc::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 40.0));
+    b.set_film(FilmDesc { width, height, ..FilmDesc::default() });
+    b.set_defaults(RenderDefaults { spp: 16, max_depth: 8, ..RenderDefaults::default() });
     b
 }

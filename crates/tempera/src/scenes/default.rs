@@ -8,9 +8,7 @@ use super::cornell::{add_ceiling_light, add_room, room_camera};
 use super::oriented_quad;
 use crate::film::FilmDesc;
 use crate::geometry::{Shape, Sphere};
-use crate::material::{
-    ConductorFresnel, ConductorMaterial, DielectricMaterial, Material, Roughness,
-};
+use crate::material::{ConductorFresnel, ConductorMaterial, DielectricMaterial, Material, Roughness};
 use crate::math::{Rgb, Vec3};
 use crate::scene::{RenderDefaults, SceneBuilder};
 
@@ -21,10 +19,7 @@ const ALUMINIUM: (Rgb, Rgb) = (Rgb::new(1.657, 0.880, 0.521), Rgb::new(9.224, 6.
 
 fn conductor((eta, k): (Rgb, Rgb), alpha: f32) -> Material {
     Material::Conductor(ConductorMaterial {
-        fresnel: ConductorFresnel::Ior {
-            eta: eta.into(),
-            k: k.into(),
-        },
+        fresnel: ConductorFresnel::Ior { eta: eta.into(), k: k.into() },
         roughness: Roughness::alpha(alpha),
     })
 }
@@ -34,23 +29,13 @@ pub fn default_scene() -> SceneBuilder {
     add_room(&mut b);
     add_ceiling_light(&mut b, 0.15, -0.3, Rgb::new(17.0, 12.0, 4.0) * 2.5);
 
-    let glass = b.add_material(Material::Dielectric(DielectricMaterial {
-        eta: 1.5,
-        roughness: Roughness::alpha(0.03),
-    }));
-    let glass_sphere = Sphere {
-        center: Vec3::new(0.35, 0.38, 0.25),
-        radius: 0.38,
-        reverse_orientation: false,
-    };
+    let glass =
+        b.add_material(Material::Dielectric(DielectricMaterial { eta: 1.5, roughness: Roughness::alpha(0.03) }));
+    let glass_sphere = Sphere { center: Vec3::new(0.35, 0.38, 0.25), radius: 0.38, reverse_orientation: false };
     b.add_shape(Shape::Sphere(glass_sphere), glass, None);
 
     let gold = b.add_material(conductor(GOLD, 0.05));
-    let gold_sphere = Sphere {
-        center: Vec3::new(-0.45, 0.32, -0.35),
-        radius: 0.32,
-        reverse_orientation: false,
-    };
+    let gold_sphere = Sphere { center: Vec3::new(-0.45, 0.32, -0.35), radius: 0.32, reverse_orientation: false };
     b.add_shape(Shape::Sphere(gold_sphere), gold, None);
 
     let mirror = b.add_material(conductor(ALUMINIUM, 0.02));
@@ -59,14 +44,7 @@ pub fn default_scene() -> SceneBuilder {
     b.add_shape(panel, mirror, None);
 
     b.set_camera(room_camera(38.0));
-    b.set_film(FilmDesc {
-        width: 512,
-        height: 512,
-        ..FilmDesc::default()
-    });
-    b.set_defaults(RenderDefaults {
-        spp: 64,
-        max_depth: 8,
-    });
+    b.set_film(FilmDesc { width: 512, height: 512, ..FilmDesc::default() });
+    b.set_defaults(RenderDefaults { spp: 64, max_depth: 8, ..RenderDefaults::default() });
     b
 }

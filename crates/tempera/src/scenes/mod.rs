@@ -13,8 +13,8 @@ use crate::math::Vec3;
 /// A quad `a, b, c, d` (counter-clockwise seen from the side its normal points to) as two
 /// triangles.
 pub fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> Shape {
-    let mesh = TriangleMesh::new(vec![a, b, c, d], vec![[0, 1, 2], [0, 2, 3]], None, None)
-        .expect("four vertices, in range");
+    let mesh =
+        TriangleMesh::new(vec![a, b, c, d], vec![[0, 1, 2], [0, 2, 3]], None, None).expect("four vertices, in range");
     Shape::Mesh(mesh)
 }
 
@@ -24,10 +24,5 @@ pub fn oriented_quad(center: Vec3, normal: Vec3, u: Vec3, half_u: f32, half_v: f
     let n = normal.normalize();
     let u = u.normalize() * half_u;
     let v = n.cross(u.normalize()) * half_v;
-    quad(
-        center - u - v,
-        center + u - v,
-        center + u + v,
-        center - u + v,
-    )
+    quad(center - u - v, center + u - v, center + u + v, center - u + v)
 }

@@ -15,16 +15,8 @@ pub struct Image {
 
 impl Image {
     pub fn new(width: usize, height: usize, pixels: Vec<Rgb>) -> Self {
-        assert_eq!(
-            pixels.len(),
-            width * height,
-            "pixel count must match the image size"
-        );
-        Self {
-            width,
-            height,
-            pixels,
-        }
+        assert_eq!(pixels.len(), width * height, "pixel count must match the image size");
+        Self { width, height, pixels }
     }
 
     pub fn filled(width: usize, height: usize, value: Rgb) -> Self {
@@ -37,19 +29,12 @@ impl Image {
     }
 
     pub fn mean(&self) -> Rgb {
-        let sum = self.pixels.iter().fold([0f64; 3], |acc, p| {
-            [
-                acc[0] + f64::from(p.x),
-                acc[1] + f64::from(p.y),
-                acc[2] + f64::from(p.z),
-            ]
-        });
+        let sum = self
+            .pixels
+            .iter()
+            .fold([0f64; 3], |acc, p| [acc[0] + f64::from(p.x), acc[1] + f64::from(p.y), acc[2] + f64::from(p.z)]);
         let n = self.pixels.len().max(1) as f64;
-        Rgb::new(
-            (sum[0] / n) as f32,
-            (sum[1] / n) as f32,
-            (sum[2] / n) as f32,
-        )
+        Rgb::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32)
     }
 }
 
@@ -87,20 +72,11 @@ pub struct ImageTexture {
 
 impl ImageTexture {
     pub fn new(image: Arc<Image>) -> Self {
-        Self {
-            image,
-            wrap: WrapMode::Repeat,
-            mapping: UvMapping::default(),
-            scale: 1.0,
-            invert: false,
-        }
+        Self { image, wrap: WrapMode::Repeat, mapping: UvMapping::default(), scale: 1.0, invert: false }
     }
 
     fn texel(&self, x: i64, y: i64) -> Rgb {
-        match (
-            self.wrap.apply(x, self.image.width),
-            self.wrap.apply(y, self.image.height),
-        ) {
+        match (self.wrap.apply(x, self.image.width), self.wrap.apply(y, self.image.height)) {
             (Some(x), Some(y)) => self.image.get(x, y),
             _ => Rgb::ZERO,
         }
@@ -122,10 +98,6 @@ impl ImageTexture {
             + (1.0 - dx) * dy * self.texel(xi, yi + 1)
             + dx * dy * self.texel(xi + 1, yi + 1);
         let v = v * self.scale;
-        if self.invert {
-            (Rgb::ONE - v).max(Rgb::ZERO)
-        } else {
-            v
-        }
+        if self.invert { (Rgb::ONE - v).max(Rgb::ZERO) } else { v }
     }
 }

@@ -18,12 +18,7 @@ pub struct UvMapping {
 
 impl Default for UvMapping {
     fn default() -> Self {
-        Self {
-            su: 1.0,
-            sv: 1.0,
-            du: 0.0,
-            dv: 0.0,
-        }
+        Self { su: 1.0, sv: 1.0, du: 0.0, dv: 0.0 }
     }
 }
 
@@ -49,6 +44,8 @@ pub enum Texture {
     Image(ImageTexture),
     Checkerboard(Box<Checkerboard>),
     Scale(Box<(Texture, Texture)>),
+    /// `(1 - amount)·a + amount·b` for `(a, b, amount)`.
+    Mix(Box<(Texture, Texture, Texture)>),
 }
 
 impl From<Rgb> for Texture {
@@ -72,13 +69,13 @@ impl Texture {
             Texture::Image(t) => t.bilinear(uv),
             Texture::Checkerboard(c) => {
                 let st = c.mapping.map(uv);
-                if (st.x.floor() as i64 + st.y.floor() as i64) % 2 == 0 {
-                    c.even.eval(uv)
-                } else {
-                    c.odd.eval(uv)
-                }
+                if (st.x.floor() as i64 + st.y.floor() as i64) % 2 == 0 { c.even.eval(uv) } else { c.odd.eval(uv) }
             }
             Texture::Scale(pair) => pair.0.eval(uv) * pair.1.eval(uv),
+            Texture::Mix(m) => {
+                let t = m.2.eval_float(uv);
+                (1.0 - t) * m.0.eval(uv) + t * m.1.eval(uv)
+            }
         }
     }
 
@@ -95,14 +92,14 @@ impl Texture {
             Texture::Constant(c) => *c,
             Texture::Image(t) => {
                 let m = t.image.mean() * t.scale;
-                if t.invert {
-                    (Rgb::ONE - m).max(Rgb::ZERO)
-                } else {
-                    m
-                }
+                if t.invert { (Rgb::ONE - m).max(Rgb::ZERO) } else { m }
             }
             Texture::Checkerboard(c) => 0.5 * (c.even.average() + c.odd.average()),
             Texture::Scale(pair) => pair.0.average() * pair.1.average(),
+            Texture::Mix(m) => {
+                let t = m.2.average().x;
+                (1.0 - t) * m.0.average() + t * m.1.average()
+            }
         }
     }
 
@@ -139,11 +136,7 @@ mod tests {
     fn wrap_modes_differ_outside_the_unit_square() {
         let mut t = ramp();
         let outside = Vec2::new(1.25, 0.75);
-        assert_eq!(
-            t.bilinear(outside).x,
-            0.0,
-            "repeat wraps to the left column"
-        );
+        assert_eq!(t.bilinear(outside).x, 0.0, "repeat wraps to the left column");
         t.wrap = WrapMode::Clamp;
         assert_eq!(t.bilinear(outside).x, 1.0);
         t.wrap = WrapMode::Black;
@@ -156,12 +149,7 @@ mod tests {
         let c = Texture::Checkerboard(Box::new(Checkerboard {
             even: 1.0.into(),
             odd: 0.0.into(),
-            mapping: UvMapping {
-                su: 4.0,
-                sv: 4.0,
-                du: 0.0,
-                dv: 0.0,
-            },
+            mapping: UvMapping { su: 4.0, sv: 4.0, du: 0.0, dv: 0.0 },
         }));
         assert_eq!(c.eval(Vec2::new(0.1, 0.1)).x, 1.0);
         assert_eq!(c.eval(Vec2::new(0.3, 0.1)).x, 0.0);
@@ -169,5 +157,7 @@ mod tests {
         let s = Texture::Scale(Box::new((c, Rgb::new(2.0, 3.0, 4.0).into())));
         assert_eq!(s.eval(Vec2::new(0.1, 0.1)), Rgb::new(2.0, 3.0, 4.0));
         assert_eq!(s.average(), Rgb::new(1.0, 1.5, 2.0));
+        let m = Texture::Mix(Box::new((Rgb::ZERO.into(), Rgb::splat(4.0).into(), 0.25.into())));
+        assert_eq!(m.eval(Vec2::ZERO), Rgb::ONE);
     }
 }

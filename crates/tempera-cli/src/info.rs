@@ -1,0 +1,53 @@
+//! `tempera info`: what a scene file contains once loaded: counts of shapes, triangles,
+//! instances, materials and lights by type, textures, the loader's warnings, and timings.
+
+use crate::scene;
+use anyhow::Result;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    /// Scene file (.pbrt or .xml); omitted describes the embedded default scene.
+    pub scene: Option<PathBuf>,
+    /// Treat loader warnings as errors.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+pub fn run(args: InfoArgs) -> Result<()> {
+    let loaded = scene::load(args.scene.as_deref(), args.strict)?;
+    let s = &loaded.scene;
+    let name = args.scene.as_ref().map_or_else(|| "embedded default scene".to_owned(), |p| p.display().to_string());
+    println!("{name}");
+    println!("  film          {}x{}, {:?}", s.film.width, s.film.height, s.film.filter);
+    println!("  defaults      {} spp, maxdepth {}", s.defaults.spp, s.defaults.max_depth);
+    if let Some(i) = &s.defaults.integrator {
+        println!("  integrator    {i}");
+    }
+    if let Some(o) = &s.defaults.output {
+        println!("  output        {o}");
+    }
+    println!("  primitives    {}", s.geometry.prims.len());
+    if let Some(info) = &loaded.info {
+        println!("  files         {}", info.files);
+        println!("  shapes        {} ({} triangles, {} instances)", info.shapes, info.triangles, info.instances);
+        println!("  textures      {}", info.textures);
+        let list = |m: &std::collections::BTreeMap<String, usize>| {
+            m.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
+        };
+        println!("  materials     {}", list(&info.materials));
+        println!("  lights        {}", list(&info.lights));
+    }
+    let area = s.lights.iter().filter(|l| matches!(l, tempera::light::Light::Area(_))).count();
+    println!("  emitters      {} lights in total ({area} area-light primitives)", s.lights.len());
+    println!(
+        "  load time     {:.3} s (parse and meshes), {:.3} s (BVH build)",
+        loaded.load_seconds, loaded.build_seconds
+    );
+    println!("  warnings      {}", loaded.warnings.len());
+    for w in &loaded.warnings {
+        println!("    {w}");
+    }
+    Ok(())
+}

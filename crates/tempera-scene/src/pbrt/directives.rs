@@ -1,0 +1,426 @@
+//! Dispatch of pbrt-v4 directives: transformations, attribute blocks, scene-wide settings
+//! (camera, film, sampler, integrator, filter), includes, object instancing and media.
+
+use super::lexer::{Lexer, TokenKind, unescape};
+use super::params::ParamSet;
+use super::state::{self, MaterialSlot};
+use super::{Block, Loader};
+use crate::LoadError;
+use crate::diagnostics::Loc;
+use tempera::camera::CameraDesc;
+use tempera::film::Filter;
+use tempera::math::{Mat4, Vec3};
+
+/// Reads a quoted-string argument.
+pub(super) fn string_arg(lx: &mut Lexer, what: &str) -> Result<(String, Loc), LoadError> {
+    match lx.next_token()? {
+        Some(t) => {
+            let loc = lx.loc_of(&t);
+            match t.kind {
+                TokenKind::Str(s) => Ok((unescape(s), loc)),
+                _ => Err(lx.error(loc, format!("expected a quoted {what}"))),
+            }
+        }
+        None => Err(lx.error(lx.here(), format!("expected a quoted {what}, found end of file"))),
+    }
+}
+
+/// Reads `n` numbers, bare or inside one pair of brackets.
+fn numbers(lx: &mut Lexer, n: usize, directive: &str) -> Result<Vec<f32>, LoadError> {
+    let bracketed = matches!(lx.peek()?, Some(t) if t.kind == TokenKind::Open);
+    if bracketed {
+        lx.next_token()?;
+    }
+    let mut out = Vec::with_capacity(n);
+    while out.len() < n {
+        let Some(t) = lx.next_token()? else {
+            return Err(lx.error(lx.here(), format!("{directive} expects {n} numbers, found end of file")));
+        };
+        match t.kind {
+            TokenKind::Number(v) => out.push(v as f32),
+            _ => {
+                let loc = lx.loc_of(&t);
+                return Err(lx.error(loc, format!("{directive} expects {n} numbers, found {}", out.len())));
+            }
+        }
+    }
+    if bracketed {
+        match lx.next_token()? {
+            Some(t) if t.kind == TokenKind::Close => {}
+            Some(t) => {
+                return Err(lx.error(lx.loc_of(&t), format!("expected ']' after the {n} numbers of {directive}")));
+            }
+            None => return Err(lx.error(lx.here(), format!("expected ']' after the {n} numbers of {directive}"))),
+        }
+    }
+    Ok(out)
+}
+
+/// Skips the arguments of an unknown directive: everything up to the next bare word.
+fn skip_arguments(lx: &mut Lexer) -> Result<(), LoadError> {
+    while let Some(t) = lx.peek()? {
+        if matches!(t.kind, TokenKind::Ident(w) if w != "true" && w != "false") {
+            break;
+        }
+        lx.next_token()?;
+    }
+    Ok(())
+}
+
+impl Loader {
+    fn apply(&mut self, m: Mat4) {
+        self.state.ctm *= m;
+    }
+
+    fn begin(&mut self, block: Block, loc: Loc) {
+        self.stack.push((self.state.clone(), block, loc));
+    }
+
+    fn end(&mut self, block: Block, loc: &Loc) -> Result<(), LoadError> {
+        let name = |b: Block| if b == Block::Attribute { "Attribute" } else { "Transform" };
+        match self.stack.pop() {
+            Some((saved, b, _)) if b == block => {
+                if block == Block::Attribute {
+                    self.state = saved;
+                } else {
+                    self.state.ctm = saved.ctm;
+                }
+                Ok(())
+            }
+            Some((_, b, open)) => Err(LoadError::Syntax {
+                loc: loc.clone(),
+                message: format!("{}End does not match {}Begin at line {}", name(block), name(b), open.line),
+            }),
+            None => Err(LoadError::Syntax {
+                loc: loc.clone(),
+                message: format!("{}End without {}Begin", name(block), name(block)),
+            }),
+        }
+    }
+
+    pub(super) fn directive(&mut self, name: &str, lx: &mut Lexer, loc: Loc) -> Result<(), LoadError> {
+        match name {
+            "AttributeBegin" => self.begin(Block::Attribute, loc),
+            "AttributeEnd" => self.end(Block::Attribute, &loc)?,
+            "TransformBegin" => self.begin(Block::Transform, loc),
+            "TransformEnd" => self.end(Block::Transform, &loc)?,
+            "Identity" => self.state.ctm = Mat4::IDENTITY,
+            "Translate" => {
+                let v = numbers(lx, 3, name)?;
+                self.apply(Mat4::from_translation(Vec3::new(v[0], v[1], v[2])));
+            }
+            "Scale" => {
+                let v = numbers(lx, 3, name)?;
+                self.apply(Mat4::from_scale(Vec3::new(v[0], v[1], v[2])));
+            }
+            "Rotate" => {
+                let v = numbers(lx, 4, name)?;
+                let r = state::rotation(v[0], Vec3::new(v[1], v[2], v[3])).ok_or_else(|| LoadError::Syntax {
+                    loc: loc.clone(),
+                    message: "Rotate about a zero axis".into(),
+                })?;
+                self.apply(r);
+            }
+            "LookAt" => {
+                let v = numbers(lx, 9, name)?;
+                let m = state::look_at(
+                    Vec3::new(v[0], v[1], v[2]),
+                    Vec3::new(v[3], v[4], v[5]),
+                    Vec3::new(v[6], v[7], v[8]),
+                )
+                .ok_or_else(|| LoadError::Syntax {
+                    loc: loc.clone(),
+                    message: "degenerate LookAt (eye = target or up parallel to the view)".into(),
+                })?;
+                self.apply(m);
+            }
+            "Transform" | "ConcatTransform" => {
+                let v = numbers(lx, 16, name)?;
+                let m = Mat4::from_cols_slice(&v);
+                if name == "Transform" {
+                    self.state.ctm = m;
+                } else {
+                    self.apply(m);
+                }
+            }
+            "CoordinateSystem" => {
+                let (n, _) = string_arg(lx, "coordinate system name")?;
+                self.named.coord_systems.insert(n, self.state.ctm);
+            }
+            "CoordSysTransform" => {
+                let (n, at) = string_arg(lx, "coordinate system name")?;
+                match self.named.coord_systems.get(&n) {
+                    Some(m) => self.state.ctm = *m,
+                    None => self.warn(Some(&at), format!("unknown coordinate system \"{n}\""))?,
+                }
+            }
+            "ReverseOrientation" => self.state.reverse_orientation = !self.state.reverse_orientation,
+            "WorldBegin" => {
+                self.state.ctm = Mat4::IDENTITY;
+                self.named.coord_systems.insert("world".into(), Mat4::IDENTITY);
+                self.world_begun = true;
+            }
+            "WorldEnd" => {}
+            "Option" => self.option(lx)?,
+            "ColorSpace" => {
+                let (space, at) = string_arg(lx, "colour space")?;
+                if space != "srgb" {
+                    self.warn(Some(&at), format!("colour space \"{space}\" is not supported; using sRGB"))?;
+                }
+            }
+            "Camera" => self.camera(lx)?,
+            "Film" => self.film(lx)?,
+            "Sampler" => self.sampler(lx)?,
+            "Integrator" => self.integrator(lx)?,
+            "PixelFilter" => self.filter(lx)?,
+            "Accelerator" => {
+                string_arg(lx, "accelerator type")?;
+                ParamSet::parse(lx)?;
+            }
+            "Texture" => self.texture_directive(lx)?,
+            "Material" => {
+                let (ty, at) = string_arg(lx, "material type")?;
+                let params = ParamSet::parse(lx)?;
+                let slot = self.make_material(&ty, &params, &at)?;
+                self.report_unused(&params, &format!("Material \"{ty}\""))?;
+                self.state.material = slot;
+            }
+            "MakeNamedMaterial" => {
+                let (n, at) = string_arg(lx, "material name")?;
+                let params = ParamSet::parse(lx)?;
+                let ty = params.string("type")?.map(str::to_owned).ok_or_else(|| LoadError::Syntax {
+                    loc: at.clone(),
+                    message: format!("MakeNamedMaterial \"{n}\" needs a \"string type\" parameter"),
+                })?;
+                let slot = self.make_material(&ty, &params, &at)?;
+                self.report_unused(&params, &format!("MakeNamedMaterial \"{n}\""))?;
+                if self.named.materials.insert(n.clone(), slot).is_some() {
+                    self.warn(Some(&at), format!("material \"{n}\" redefined"))?;
+                }
+            }
+            "NamedMaterial" => {
+                let (n, at) = string_arg(lx, "material name")?;
+                self.state.material = self
+                    .named
+                    .materials
+                    .get(&n)
+                    .cloned()
+                    .ok_or_else(|| LoadError::Syntax { loc: at, message: format!("unknown material \"{n}\"") })?;
+            }
+            "LightSource" => self.light_source(lx)?,
+            "AreaLightSource" => self.area_light_source(lx)?,
+            "Shape" => self.shape_directive(lx)?,
+            "ObjectBegin" => {
+                let (n, at) = string_arg(lx, "object name")?;
+                if self.object.is_some() {
+                    return Err(LoadError::Syntax {
+                        loc: at,
+                        message: "ObjectBegin inside another ObjectBegin".into(),
+                    });
+                }
+                self.begin(Block::Attribute, at.clone());
+                self.object = Some((n, Vec::new(), at));
+            }
+            "ObjectEnd" => {
+                let Some((n, shapes, _)) = self.object.take() else {
+                    return Err(LoadError::Syntax { loc, message: "ObjectEnd without ObjectBegin".into() });
+                };
+                self.named.objects.insert(n, shapes);
+                self.end(Block::Attribute, &loc)?;
+            }
+            "ObjectInstance" => {
+                let (n, at) = string_arg(lx, "object name")?;
+                self.instance(&n, &at)?;
+            }
+            "Include" | "Import" => {
+                let (file, at) = string_arg(lx, "file name")?;
+                let path = self.resolve(&at, &file);
+                self.parse_file(&path, Some(&at))?;
+            }
+            "MakeNamedMedium" => {
+                let (n, at) = string_arg(lx, "medium name")?;
+                let params = ParamSet::parse(lx)?;
+                let ty = params.string("type")?.unwrap_or("").to_owned();
+                return Err(LoadError::Syntax {
+                    loc: at,
+                    message: format!("participating media are not supported (medium \"{n}\" of type \"{ty}\")"),
+                });
+            }
+            "MediumInterface" => {
+                let (inside, at) = string_arg(lx, "medium name")?;
+                let outside = match lx.peek()? {
+                    Some(t) if matches!(t.kind, TokenKind::Str(_)) => string_arg(lx, "medium name")?.0,
+                    _ => inside.clone(),
+                };
+                if !inside.is_empty() || !outside.is_empty() {
+                    return Err(LoadError::Syntax {
+                        loc: at,
+                        message: "participating media are not supported (MediumInterface)".into(),
+                    });
+                }
+            }
+            "TransformTimes" | "ActiveTransform" | "AttributeState" => {
+                skip_arguments(lx)?;
+                self.warn_once(name, Some(&loc), format!("{name} (motion blur) is not supported and is ignored"))?;
+            }
+            _ => {
+                skip_arguments(lx)?;
+                self.warn(Some(&loc), format!("unknown directive '{name}' ignored"))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn option(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {
+        let params = ParamSet::parse(lx)?;
+        for p in &params.params {
+            p.mark_used();
+        }
+        for p in &params.params {
+            let loc = p.loc.clone();
+            self.warn(Some(&loc), format!("Option \"{}\" is not supported and is ignored", p.name))?;
+        }
+        Ok(())
+    }
+
+    fn camera(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {
+        let (ty, at) = string_arg(lx, "camera type")?;
+        let params = ParamSet::parse(lx)?;
+        if ty != "perspective" {
+            return Err(LoadError::Syntax {
+                loc: at,
+                message: format!("camera \"{ty}\" is not supported (only \"perspective\")"),
+            });
+        }
+        let camera_to_world = self.state.ctm.inverse();
+        if !camera_to_world.is_finite() {
+            return Err(LoadError::Syntax { loc: at, message: "the camera transformation is not invertible".into() });
+        }
+        self.named.coord_systems.insert("camera".into(), camera_to_world);
+        let screen_window = match params.floats("screenwindow")? {
+            Some(w) if w.len() == 4 => Some([w[0] as f32, w[1] as f32, w[2] as f32, w[3] as f32]),
+            Some(_) => return Err(LoadError::Syntax { loc: at, message: "\"screenwindow\" needs 4 values".into() }),
+            None => None,
+        };
+        let fov = params.float("fov", 90.0)?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(LoadError::Syntax { loc: at, message: format!("fov {fov} is outside (0, 180)") });
+        }
+        self.builder.set_camera(CameraDesc {
+            camera_to_world,
+            fov_degrees: fov as f32,
+            lens_radius: params.float("lensradius", 0.0)? as f32,
+            focal_distance: params.float("focaldistance", 1e6)? as f32,
+            screen_window,
+        });
+        self.report_unused(&params, "Camera \"perspective\"")
+    }
+
+    fn film(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {
+        let (ty, at) = string_arg(lx, "film type")?;
+        let params = ParamSet::parse(lx)?;
+        if ty != "rgb" {
+            self.warn(Some(&at), format!("film \"{ty}\" is treated as \"rgb\""))?;
+        }
+        let (w, h) = (params.int("xresolution", 1280)?, params.int("yresolution", 720)?);
+        if !(1..=65_536).contains(&w) || !(1..=65_536).contains(&h) {
+            return Err(LoadError::Syntax { loc: at, message: format!("film resolution {w}x{h} is out of range") });
+        }
+        self.film.width = w as u32;
+        self.film.height = h as u32;
+        if let Some(name) = params.string("filename")? {
+            self.defaults.output = Some(name.to_owned());
+        }
+        self.report_unused(&params, &format!("Film \"{ty}\""))
+    }
+
+    fn sampler(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {
+        let (ty, at) = string_arg(lx, "sampler type")?;
+        let params = ParamSet::parse(lx)?;
+        let spp = params.int("pixelsamples", 16)?;
+        if !(1..=1 << 24).contains(&spp) {
+            return Err(LoadError::Syntax { loc: at, message: format!("pixelsamples {spp} is out of range") });
+        }
+        self.defaults.spp = spp as u32;
+        self.report_unused(&params, &format!("Sampler \"{ty}\""))
+    }
+
+    fn integrator(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {
+        let (ty, at) = string_arg(lx, "integrator type")?;
+        let params = ParamSet::parse(lx)?;
+        let depth = params.int("maxdepth", 5)?;
+        if !(0..=100_000).contains(&depth) {
+            return Err(LoadError::Syntax { loc: at, message: format!("maxdepth {depth} is out of range") });
+        }
+        self.defaults.max_depth = depth as u32;
+        self.info.integrator = Some(ty.clone());
+        self.defaults.integrator = Some(match ty.as_str() {
+            "path" | "volpath" => "path".to_owned(),
+            "mlt" => "mmlt".to_owned(),
+            other => other.to_owned(),
+        });
+        self.report_unused(&params, &format!("Integrator \"{ty}\""))
+    }
+
+    fn filter(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {
+        let (ty, at) = string_arg(lx, "filter type")?;
+        let params = ParamSet::parse(lx)?;
+        let default_radius = match ty.as_str() {
+            "box" => 0.5,
+            "gaussian" => 1.5,
+            "triangle" | "mitchell" => 2.0,
+            "sinc" => 4.0,
+            _ => return Err(LoadError::Syntax { loc: at, message: format!("unknown pixel filter \"{ty}\"") }),
+        };
+        let (rx, ry) = (params.float("xradius", default_radius)?, params.float("yradius", default_radius)?);
+        if rx != ry {
+            self.warn(Some(&at), format!("anisotropic filter radii ({rx}, {ry}) are not supported; using {rx}"))?;
+        }
+        let radius = rx.max(1e-3) as f32;
+        self.film.filter = match ty.as_str() {
+            "box" => Filter::Box { radius },
+            "triangle" => Filter::Triangle { radius },
+            "gaussian" => Filter::Gaussian { radius, sigma: params.float("sigma", 0.5)? as f32 },
+            _ => {
+                self.warn(
+                    Some(&at),
+                    format!("pixel filter \"{ty}\" is approximated by a Gaussian of the same radius"),
+                )?;
+                Filter::Gaussian { radius, sigma: radius / 3.0 }
+            }
+        };
+        self.report_unused(&params, &format!("PixelFilter \"{ty}\""))
+    }
+
+    fn instance(&mut self, name: &str, at: &Loc) -> Result<(), LoadError> {
+        let Some(shapes) = self.named.objects.get(name).cloned() else {
+            return Err(LoadError::Syntax { loc: at.clone(), message: format!("unknown object \"{name}\"") });
+        };
+        let ctm = self.state.ctm;
+        self.info.instances += 1;
+        for s in shapes {
+            let shape = super::shapes::transformed(s.shape, &ctm);
+            self.add_shape(shape, &s.material, s.emission.clone());
+        }
+        Ok(())
+    }
+
+    /// Adds a shape to the scene, or to the object being defined.
+    pub(super) fn add_shape(
+        &mut self,
+        shape: tempera::geometry::Shape,
+        material: &MaterialSlot,
+        emission: Option<tempera::scene::AreaEmission>,
+    ) {
+        if let Some((_, shapes, _)) = &mut self.object {
+            shapes.push(super::state::ObjectShape { shape, material: material.clone(), emission });
+            return;
+        }
+        let Some(id) = self.material_id(material) else { return };
+        self.info.shapes += 1;
+        if let tempera::geometry::Shape::Mesh(m) = &shape {
+            self.info.triangles += m.indices.len();
+        }
+        self.builder.add_shape(shape, id, emission);
+    }
+}

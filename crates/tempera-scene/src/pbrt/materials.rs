@@ -1,0 +1,185 @@
+//! pbrt-v4 materials translated into core materials. `diffuse`, `conductor` and `dielectric`
+//! map exactly. pbrt-v4's stochastic layered `coateddiffuse` is approximated by the analytic
+//! coated-diffuse (plastic) model with the same coat index and roughness, and `coatedconductor`
+//! by its base conductor; these and other approximations are reported once per material type.
+
+use super::Loader;
+use super::params::ParamSet;
+use super::state::MaterialSlot;
+use super::textures::SpectrumUse;
+use crate::LoadError;
+use crate::diagnostics::Loc;
+use tempera::material::{
+    CoatedDiffuseMaterial, ConductorFresnel, ConductorMaterial, DielectricMaterial, Material, Roughness,
+};
+use tempera::math::Rgb;
+use tempera::texture::Texture;
+
+impl Loader {
+    fn roughness(&mut self, params: &ParamSet, prefix: &str) -> Result<Roughness, LoadError> {
+        let name = |n: &str| format!("{prefix}{n}");
+        let r = self.float_param(params, &name("roughness"), 0.0)?;
+        let u = if params.params.iter().any(|p| p.name == name("uroughness")) {
+            self.float_param(params, &name("uroughness"), 0.0)?
+        } else {
+            r.clone()
+        };
+        let v = if params.params.iter().any(|p| p.name == name("vroughness")) {
+            self.float_param(params, &name("vroughness"), 0.0)?
+        } else {
+            r
+        };
+        let remap = params.bool("remaproughness", true)?;
+        Ok(Roughness { u, v, remap })
+    }
+
+    /// A scalar index of refraction from a float or a (named) spectrum.
+    fn eta(&mut self, params: &ParamSet, name: &str, default: f32, at: &Loc) -> Result<f32, LoadError> {
+        let eta = match self.spectrum_param(params, name, Some(Rgb::splat(default)), SpectrumUse::Unitless)? {
+            Some(Texture::Constant(c)) => c.y,
+            _ => {
+                return Err(LoadError::Syntax {
+                    loc: at.clone(),
+                    message: format!("textured \"{name}\" is not supported"),
+                });
+            }
+        };
+        if eta.is_nan() || eta <= 0.0 {
+            return Err(LoadError::Syntax {
+                loc: at.clone(),
+                message: format!("index of refraction must be positive, got {eta}"),
+            });
+        }
+        Ok(eta)
+    }
+
+    fn conductor(&mut self, params: &ParamSet, prefix: &str) -> Result<ConductorMaterial, LoadError> {
+        let key = |n: &str| format!("{prefix}{n}");
+        let fresnel = match self.spectrum_param(params, &key("reflectance"), None, SpectrumUse::Unitless)? {
+            Some(r) => ConductorFresnel::Reflectance(r),
+            None => {
+                let eta = self.spectrum_param(
+                    params,
+                    &key("eta"),
+                    super::spectrum::named("metal-Cu-eta"),
+                    SpectrumUse::Unitless,
+                )?;
+                let k = self.spectrum_param(
+                    params,
+                    &key("k"),
+                    super::spectrum::named("metal-Cu-k"),
+                    SpectrumUse::Unitless,
+                )?;
+                ConductorFresnel::Ior { eta: eta.expect("default given"), k: k.expect("default given") }
+            }
+        };
+        Ok(ConductorMaterial { fresnel, roughness: self.roughness(params, prefix)? })
+    }
+
+    fn approximated(&mut self, ty: &str, at: &Loc, how: &str) -> Result<(), LoadError> {
+        self.warn_once(&format!("material-{ty}"), Some(at), format!("material \"{ty}\" is approximated: {how}"))
+    }
+
+    pub(super) fn make_material(&mut self, ty: &str, params: &ParamSet, at: &Loc) -> Result<MaterialSlot, LoadError> {
+        if params.find("displacement").is_some() {
+            self.warn_once(
+                "displacement",
+                Some(at),
+                "bump mapping (\"displacement\") is not supported yet and is ignored",
+            )?;
+        }
+        if params.find("normalmap").is_some() {
+            self.warn_once("normalmap", Some(at), "normal maps are not supported yet and are ignored")?;
+        }
+        let material = match ty {
+            "diffuse" => Material::diffuse(
+                self.spectrum_param(params, "reflectance", Some(Rgb::splat(0.5)), SpectrumUse::Unitless)?
+                    .expect("default"),
+            ),
+            "conductor" => Material::Conductor(self.conductor(params, "")?),
+            "dielectric" | "thindielectric" => {
+                if ty == "thindielectric" {
+                    self.approximated(ty, at, "rendered as a solid dielectric of the same index")?;
+                }
+                let eta = self.eta(params, "eta", 1.5, at)?;
+                Material::Dielectric(DielectricMaterial { eta, roughness: self.roughness(params, "")? })
+            }
+            "coateddiffuse" => {
+                self.approximated(ty, at, "analytic coated diffuse (GGX dielectric coat over Lambertian, no coat absorption or interreflection sampling)")?;
+                for p in ["thickness", "albedo", "g", "maxdepth", "nsamples"] {
+                    params.find(p);
+                }
+                let reflectance = self
+                    .spectrum_param(params, "reflectance", Some(Rgb::splat(0.5)), SpectrumUse::Unitless)?
+                    .expect("default");
+                let eta = self.eta(params, "eta", 1.5, at)?;
+                Material::CoatedDiffuse(CoatedDiffuseMaterial::new(
+                    reflectance,
+                    self.roughness(params, "")?,
+                    eta,
+                    false,
+                ))
+            }
+            "coatedconductor" => {
+                self.approximated(ty, at, "its base conductor without the dielectric coat")?;
+                for p in [
+                    "interface.roughness",
+                    "interface.uroughness",
+                    "interface.vroughness",
+                    "interface.eta",
+                    "thickness",
+                    "albedo",
+                    "g",
+                    "maxdepth",
+                    "nsamples",
+                ] {
+                    params.find(p);
+                }
+                Material::Conductor(self.conductor(params, "conductor.")?)
+            }
+            "diffusetransmission" => {
+                self.approximated(ty, at, "diffuse reflection only (transmission is dropped)")?;
+                params.find("transmittance");
+                let r = self
+                    .spectrum_param(params, "reflectance", Some(Rgb::splat(0.25)), SpectrumUse::Unitless)?
+                    .expect("default");
+                let scale = params.float("scale", 1.0)? as f32;
+                Material::diffuse(Texture::Scale(Box::new((r, scale.into()))))
+            }
+            "mix" => {
+                let names = match params.find("materials").map(|p| &p.values) {
+                    Some(super::params::Values::Str(v)) if v.len() == 2 => v.clone(),
+                    _ => {
+                        return Err(LoadError::Syntax {
+                            loc: at.clone(),
+                            message: "mix needs \"string materials\" with two names".into(),
+                        });
+                    }
+                };
+                let amount = self.float_param(params, "amount", 0.5)?.average().x;
+                self.approximated(ty, at, "the component with the larger average amount is used")?;
+                let chosen = if amount > 0.5 { &names[1] } else { &names[0] };
+                return self.named.materials.get(chosen).cloned().ok_or_else(|| LoadError::Syntax {
+                    loc: at.clone(),
+                    message: format!("mix refers to unknown material \"{chosen}\""),
+                });
+            }
+            "interface" => return Ok(MaterialSlot::Interface),
+            "measured" | "hair" | "subsurface" => {
+                for p in &params.params {
+                    p.mark_used();
+                }
+                self.approximated(ty, at, "a grey diffuse material stands in for it")?;
+                Material::diffuse(Rgb::splat(0.5))
+            }
+            other => {
+                return Err(LoadError::Syntax {
+                    loc: at.clone(),
+                    message: format!("unknown material type \"{other}\""),
+                });
+            }
+        };
+        *self.info.materials.entry(ty.to_owned()).or_default() += 1;
+        Ok(MaterialSlot::Id(self.builder.add_material(material)))
+    }
+}

@@ -1,0 +1,290 @@
+//! pbrt-v4 shapes translated into core shapes: triangle meshes (inline and PLY), bilinear
+//! patches (two triangles each), spheres and disks (analytic when the transformation is a
+//! similarity and the shape is whole, tessellated otherwise), and cylinders (tessellated).
+
+use super::Loader;
+use super::directives::string_arg;
+use super::lexer::Lexer;
+use super::params::ParamSet;
+use super::state::uniform_scale;
+use crate::LoadError;
+use crate::diagnostics::Loc;
+use std::f32::consts::TAU;
+use tempera::geometry::{Disk, Shape, Sphere, TriangleMesh};
+use tempera::math::{Mat4, Vec2, Vec3};
+
+/// Segments around the axis of tessellated quadrics.
+const SEGMENTS: u32 = 96;
+const RINGS: u32 = 48;
+
+fn syntax(loc: &Loc, message: impl Into<String>) -> LoadError {
+    LoadError::Syntax { loc: loc.clone(), message: message.into() }
+}
+
+fn vec3s(v: Vec<Vec<f64>>) -> Vec<Vec3> {
+    v.into_iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect()
+}
+
+/// A grid mesh over `(u, v) ∈ [0,1]²` mapped through `f` to a position and normal.
+fn grid(nu: u32, nv: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> TriangleMesh {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut uvs = Vec::new();
+    for j in 0..=nv {
+        for i in 0..=nu {
+            let (u, v) = (i as f32 / nu as f32, j as f32 / nv as f32);
+            let (p, n) = f(u, v);
+            positions.push(p);
+            normals.push(n);
+            uvs.push(Vec2::new(u, v));
+        }
+    }
+    let mut indices = Vec::new();
+    for j in 0..nv {
+        for i in 0..nu {
+            let a = j * (nu + 1) + i;
+            let b = a + nu + 1;
+            indices.push([a, a + 1, b + 1]);
+            indices.push([a, b + 1, b]);
+        }
+    }
+    TriangleMesh::new(positions, indices, Some(normals), Some(uvs)).expect("grid indices are in range")
+}
+
+fn sphere_mesh(radius: f32, zmin: f32, zmax: f32, phi_max: f32) -> TriangleMesh {
+    let (t0, t1) = ((zmin / radius).clamp(-1.0, 1.0).acos(), (zmax / radius).clamp(-1.0, 1.0).acos());
+    grid(SEGMENTS, RINGS, |u, v| {
+        let (phi, theta) = (u * phi_max, t0 + (t1 - t0) * v);
+        let n = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+        (n * radius, n)
+    })
+}
+
+fn disk_mesh(height: f32, radius: f32, inner: f32, phi_max: f32) -> TriangleMesh {
+    grid(SEGMENTS, 4, |u, v| {
+        let (phi, r) = (u * phi_max, radius + (inner - radius) * v);
+        (Vec3::new(r * phi.cos(), r * phi.sin(), height), Vec3::Z)
+    })
+}
+
+fn cylinder_mesh(radius: f32, zmin: f32, zmax: f32, phi_max: f32) -> TriangleMesh {
+    grid(SEGMENTS, 1, |u, v| {
+        let phi = u * phi_max;
+        let n = Vec3::new(phi.cos(), phi.sin(), 0.0);
+        (n * radius + Vec3::Z * (zmin + (zmax - zmin) * v), n)
+    })
+}
+
+/// Applies `m` to a world-space shape (used to place object instances).
+pub(super) fn transformed(shape: Shape, m: &Mat4) -> Shape {
+    let flips = m.determinant() < 0.0;
+    match shape {
+        Shape::Mesh(mut mesh) => {
+            mesh.transform(m);
+            Shape::Mesh(mesh)
+        }
+        Shape::Sphere(s) => match uniform_scale(m) {
+            Some(k) => Shape::Sphere(Sphere {
+                center: m.transform_point3(s.center),
+                radius: s.radius * k,
+                reverse_orientation: s.reverse_orientation ^ flips,
+            }),
+            None => {
+                let mut mesh = sphere_mesh(s.radius, -s.radius, s.radius, TAU);
+                mesh.reverse_orientation = s.reverse_orientation;
+                mesh.transform(&(*m * Mat4::from_translation(s.center)));
+                Shape::Mesh(mesh)
+            }
+        },
+        Shape::Disk(d) => match uniform_scale(m) {
+            Some(k) => {
+                let mut disk = Disk::new(
+                    m.transform_point3(d.center),
+                    m.inverse().transpose().transform_vector3(d.frame.n),
+                    d.radius * k,
+                );
+                disk.reverse_orientation = d.reverse_orientation ^ flips;
+                Shape::Disk(disk)
+            }
+            None => {
+                let mut mesh = disk_mesh(0.0, d.radius, 0.0, TAU);
+                mesh.reverse_orientation = d.reverse_orientation;
+                let frame = Mat4::from_cols(
+                    d.frame.s.extend(0.0),
+                    d.frame.t.extend(0.0),
+                    d.frame.n.extend(0.0),
+                    d.center.extend(1.0),
+                );
+                mesh.transform(&(*m * frame));
+                Shape::Mesh(mesh)
+            }
+        },
+    }
+}
+
+impl Loader {
+    fn mesh(&self, mesh: TriangleMesh) -> Shape {
+        let mut mesh = mesh;
+        mesh.reverse_orientation = self.state.reverse_orientation;
+        mesh.transform(&self.state.ctm);
+        Shape::Mesh(mesh)
+    }
+
+    fn triangle_mesh(&mut self, params: &ParamSet, at: &Loc) -> Result<Shape, LoadError> {
+        let p = vec3s(params.points("P", 3)?.ok_or_else(|| syntax(at, "trianglemesh needs \"point3 P\""))?);
+        let indices = match params.ints("indices")? {
+            Some(i) => i,
+            None if p.len() == 3 => vec![0, 1, 2],
+            None => {
+                return Err(syntax(
+                    at,
+                    "trianglemesh needs \"integer indices\" (only a single triangle may omit them)",
+                ));
+            }
+        };
+        if indices.len() % 3 != 0 || indices.iter().any(|&i| i < 0 || i > i64::from(u32::MAX)) {
+            return Err(syntax(at, "\"indices\" must be non-negative and a multiple of 3"));
+        }
+        let tris = indices.chunks(3).map(|c| [c[0] as u32, c[1] as u32, c[2] as u32]).collect();
+        let n = params.points("N", 3)?.map(vec3s);
+        let uv = params
+            .points("uv", 2)?
+            .or(params.points("st", 2)?)
+            .map(|v| v.into_iter().map(|p| Vec2::new(p[0] as f32, p[1] as f32)).collect());
+        params.find("S");
+        params.find("faceIndices");
+        let mesh = TriangleMesh::new(p, tris, n, uv).map_err(|e| syntax(at, format!("trianglemesh: {e}")))?;
+        Ok(self.mesh(mesh))
+    }
+
+    fn ply_mesh(&mut self, params: &ParamSet, at: &Loc) -> Result<Shape, LoadError> {
+        let file =
+            params.string("filename")?.ok_or_else(|| syntax(at, "plymesh needs \"string filename\""))?.to_owned();
+        let path = self.resolve(at, &file);
+        if params.find("displacement").is_some() {
+            self.warn_once(
+                "ply-displacement",
+                Some(at),
+                "plymesh displacement is not supported; meshes are used undisplaced",
+            )?;
+        }
+        params.find("edgelength");
+        let bytes = std::fs::read(&path).map_err(|e| syntax(at, format!("cannot read {}: {e}", path.display())))?;
+        let ply = crate::ply::parse(&bytes).map_err(|e| syntax(at, format!("{}: {e}", path.display())))?;
+        if ply.degenerate_faces > 0 {
+            self.warn(
+                Some(at),
+                format!("{}: {} faces with fewer than 3 vertices skipped", path.display(), ply.degenerate_faces),
+            )?;
+        }
+        let mesh = TriangleMesh::new(ply.positions, ply.indices, ply.normals, ply.uvs)
+            .map_err(|e| syntax(at, format!("{}: {e}", path.display())))?;
+        Ok(self.mesh(mesh))
+    }
+
+    fn bilinear_mesh(&mut self, params: &ParamSet, at: &Loc) -> Result<Shape, LoadError> {
+        let p = vec3s(params.points("P", 3)?.ok_or_else(|| syntax(at, "bilinearmesh needs \"point3 P\""))?);
+        let indices = match params.ints("indices")? {
+            Some(i) => i,
+            None if p.len() == 4 => vec![0, 1, 2, 3],
+            None => return Err(syntax(at, "bilinearmesh needs \"integer indices\"")),
+        };
+        if indices.len() % 4 != 0 || indices.iter().any(|&i| i < 0 || i > i64::from(u32::MAX)) {
+            return Err(syntax(at, "bilinearmesh \"indices\" must be non-negative and a multiple of 4"));
+        }
+        // Patch vertices are p00, p10, p01, p11.
+        let tris = indices
+            .chunks(4)
+            .flat_map(|c| {
+                let [a, b, c0, d] = [c[0] as u32, c[1] as u32, c[2] as u32, c[3] as u32];
+                [[a, b, d], [a, d, c0]]
+            })
+            .collect();
+        let n = params.points("N", 3)?.map(vec3s);
+        let uv = params.points("uv", 2)?.map(|v| v.into_iter().map(|p| Vec2::new(p[0] as f32, p[1] as f32)).collect());
+        let mesh = TriangleMesh::new(p, tris, n, uv).map_err(|e| syntax(at, format!("bilinearmesh: {e}")))?;
+        Ok(self.mesh(mesh))
+    }
+
+    fn quadric(&mut self, ty: &str, params: &ParamSet, at: &Loc) -> Result<Shape, LoadError> {
+        let radius = params.float("radius", 1.0)? as f32;
+        if radius.is_nan() || radius <= 0.0 {
+            return Err(syntax(at, format!("{ty} radius must be positive, got {radius}")));
+        }
+        let phi_max = (params.float("phimax", 360.0)? as f32).clamp(0.0, 360.0).to_radians();
+        let ctm = self.state.ctm;
+        let flips = ctm.determinant() < 0.0;
+        let reverse = self.state.reverse_orientation;
+        let similarity = uniform_scale(&ctm);
+        let whole = (phi_max - TAU).abs() < 1e-6;
+        let mesh = match ty {
+            "sphere" => {
+                let zmin = (params.float("zmin", -f64::from(radius))? as f32).clamp(-radius, radius);
+                let zmax = (params.float("zmax", f64::from(radius))? as f32).clamp(-radius, radius);
+                if let (Some(k), true, true) = (similarity, whole, zmin <= -radius && zmax >= radius) {
+                    let center = ctm.transform_point3(Vec3::ZERO);
+                    return Ok(Shape::Sphere(Sphere {
+                        center,
+                        radius: radius * k,
+                        reverse_orientation: reverse ^ flips,
+                    }));
+                }
+                sphere_mesh(radius, zmin.min(zmax), zmin.max(zmax), phi_max)
+            }
+            "disk" => {
+                let height = params.float("height", 0.0)? as f32;
+                let inner = params.float("innerradius", 0.0)? as f32;
+                if let (Some(k), true, true) = (similarity, whole, inner <= 0.0) {
+                    let center = ctm.transform_point3(Vec3::new(0.0, 0.0, height));
+                    let normal = ctm.inverse().transpose().transform_vector3(Vec3::Z);
+                    let mut disk = Disk::new(center, normal, radius * k);
+                    disk.reverse_orientation = reverse ^ flips;
+                    return Ok(Shape::Disk(disk));
+                }
+                disk_mesh(height, radius, inner.clamp(0.0, radius), phi_max)
+            }
+            _ => {
+                let (zmin, zmax) = (params.float("zmin", -1.0)? as f32, params.float("zmax", 1.0)? as f32);
+                cylinder_mesh(radius, zmin.min(zmax), zmin.max(zmax), phi_max)
+            }
+        };
+        Ok(self.mesh(mesh))
+    }
+
+    pub(super) fn shape_directive(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {
+        let (ty, at) = string_arg(lx, "shape type")?;
+        let params = ParamSet::parse(lx)?;
+        let shape = match ty.as_str() {
+            "trianglemesh" => Some(self.triangle_mesh(&params, &at)?),
+            "plymesh" => Some(self.ply_mesh(&params, &at)?),
+            "bilinearmesh" => Some(self.bilinear_mesh(&params, &at)?),
+            "sphere" | "disk" | "cylinder" => Some(self.quadric(&ty, &params, &at)?),
+            "loopsubdiv" => {
+                self.warn_once("loopsubdiv", Some(&at), "loopsubdiv is not subdivided; its control mesh is rendered")?;
+                params.find("levels");
+                Some(self.triangle_mesh(&params, &at)?)
+            }
+            _ => {
+                for p in &params.params {
+                    p.mark_used();
+                }
+                self.warn(Some(&at), format!("shape \"{ty}\" is not supported and is skipped"))?;
+                None
+            }
+        };
+        let alpha_is_opaque = match params.find("alpha") {
+            None => true,
+            Some(p) => matches!(&p.values, super::params::Values::Num(v) if v.first() == Some(&1.0)),
+        };
+        if !alpha_is_opaque {
+            self.warn_once("alpha", Some(&at), "alpha cut-outs are not supported yet; such surfaces render opaque")?;
+        }
+        self.report_unused(&params, &format!("Shape \"{ty}\""))?;
+        if let Some(shape) = shape {
+            let material = self.state.material.clone();
+            let emission = self.state.area_light.clone();
+            self.add_shape(shape, &material, emission);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,79 @@
+//! The pbrt-v4 graphics state: current transformation, orientation, material, area light, and
+//! the named objects (materials, textures, coordinate systems, object instances) the directives
+//! refer to (pbrt-v4 file format reference, "Attributes" and "Transformations").
+
+use std::collections::HashMap;
+use tempera::geometry::Shape;
+use tempera::math::{Mat4, Vec3};
+use tempera::scene::{AreaEmission, MaterialId};
+use tempera::texture::Texture;
+
+/// The material a shape receives.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialSlot {
+    /// The scene's default (diffuse, reflectance 0.5), created on first use.
+    Default,
+    Id(MaterialId),
+    /// pbrt's `interface`: the surface only bounds a medium and is invisible.
+    Interface,
+}
+
+#[derive(Clone, Debug)]
+pub struct GraphicsState {
+    pub ctm: Mat4,
+    pub reverse_orientation: bool,
+    pub material: MaterialSlot,
+    pub area_light: Option<AreaEmission>,
+}
+
+impl Default for GraphicsState {
+    fn default() -> Self {
+        Self { ctm: Mat4::IDENTITY, reverse_orientation: false, material: MaterialSlot::Default, area_light: None }
+    }
+}
+
+/// A shape recorded inside `ObjectBegin`/`ObjectEnd`, placed by `ObjectInstance`.
+#[derive(Clone, Debug)]
+pub struct ObjectShape {
+    pub shape: Shape,
+    pub material: MaterialSlot,
+    pub emission: Option<AreaEmission>,
+}
+
+#[derive(Default)]
+pub struct Named {
+    pub materials: HashMap<String, MaterialSlot>,
+    pub float_textures: HashMap<String, Texture>,
+    pub spectrum_textures: HashMap<String, Texture>,
+    pub coord_systems: HashMap<String, Mat4>,
+    pub objects: HashMap<String, Vec<ObjectShape>>,
+}
+
+/// pbrt's `Rotate`: `angle` degrees about `axis`.
+pub fn rotation(angle_degrees: f32, axis: Vec3) -> Option<Mat4> {
+    let axis = axis.try_normalize()?;
+    Some(Mat4::from_axis_angle(axis, angle_degrees.to_radians()))
+}
+
+/// pbrt's `LookAt` matrix (world to camera).
+pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Option<Mat4> {
+    let dir = (target - eye).try_normalize()?;
+    let right = up.try_normalize()?.cross(dir).try_normalize()?;
+    let new_up = dir.cross(right);
+    let camera_to_world = Mat4::from_cols(right.extend(0.0), new_up.extend(0.0), dir.extend(0.0), eye.extend(1.0));
+    Some(camera_to_world.inverse())
+}
+
+/// For a similarity transform (rotation, uniform scale, translation, possibly mirrored), its
+/// scale factor; `None` for shears and non-uniform scales.
+pub fn uniform_scale(m: &Mat4) -> Option<f32> {
+    let c = [m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate()];
+    let s = c[0].length();
+    let ok = s > 0.0
+        && c.iter().all(|v| (v.length() - s).abs() <= 1e-4 * s)
+        && c[0].dot(c[1]).abs() <= 1e-4 * s * s
+        && c[0].dot(c[2]).abs() <= 1e-4 * s * s
+        && c[1].dot(c[2]).abs() <= 1e-4 * s * s
+        && m.row(3) == tempera::math::Vec4::W;
+    ok.then_some(s)
+}
