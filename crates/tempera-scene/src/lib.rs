@@ -70,6 +70,11 @@ impl SceneFormat {
     }
 }
 
+/// Loads pbrt-v4 scene text as if read from `path`.
+pub fn load_pbrt_str(text: &str, path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
+    pbrt::load_str(text, path, options)
+}
+
 /// Loads the scene at `path`.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
     std::fs::metadata(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;

@@ -130,15 +130,20 @@ impl Loader {
                 message: format!("includes nested deeper than {MAX_INCLUDE_DEPTH} (a cycle?)"),
             });
         }
-        let text = std::fs::read_to_string(path).map_err(|source| match from {
+        let bytes = std::fs::read(path).map_err(|source| match from {
             Some(loc) => {
                 LoadError::Syntax { loc: loc.clone(), message: format!("cannot read {}: {source}", path.display()) }
             }
             None => LoadError::Io { path: path.to_owned(), source },
         })?;
+        let text = String::from_utf8_lossy(&bytes);
+        self.parse_source(&text, path)
+    }
+
+    fn parse_source(&mut self, text: &str, path: &Path) -> Result<(), LoadError> {
         self.info.files += 1;
         self.include_depth += 1;
-        let mut lx = Lexer::new(&text, Arc::new(path.to_owned()));
+        let mut lx = Lexer::new(text, Arc::new(path.to_owned()));
         while let Some(tok) = lx.next_token()? {
             let loc = lx.loc_of(&tok);
             match tok.kind {
@@ -164,6 +169,18 @@ impl Loader {
 pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
     let mut loader = Loader::new(options);
     loader.parse_file(path, None)?;
+    finish(loader)
+}
+
+/// Loads pbrt-v4 scene text as if it were the file `path` (relative names resolve against its
+/// folder).
+pub fn load_str(text: &str, path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
+    let mut loader = Loader::new(options);
+    loader.parse_source(text, path)?;
+    finish(loader)
+}
+
+fn finish(loader: Loader) -> Result<LoadedScene, LoadError> {
     if let Some((_, block, loc)) = loader.stack.last() {
         let what = if *block == Block::Attribute { "AttributeBegin" } else { "TransformBegin" };
         return Err(LoadError::Syntax { loc: loc.clone(), message: format!("{what} without a matching end") });
