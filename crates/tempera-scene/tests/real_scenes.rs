@@ -1,0 +1,102 @@
+//! The real scenes in `../shared/scenes` (when present): every pbrt-v4 scene loads without
+//! errors and renders, and the path-traced Cornell box agrees with Bitterli's Tungsten reference.
+
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use tempera::integrator::{Budget, Integrator, PathIntegrator, RenderControl, RenderSettings};
+use tempera::math::{Rgb, luminance};
+use tempera::scene::Scene;
+use tempera::texture::Image;
+use tempera_scene::{LoadOptions, load};
+
+fn shared_scenes() -> Option<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        eprintln!("skipping: {} not found (the real scenes live beside the project)", dir.display());
+        None
+    }
+}
+
+fn render(scene: &Scene, max_depth: u32, spp: u32) -> Image {
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let settings = RenderSettings { budget: Budget::Samples(spp), seed: 7, threads: 0 };
+    PathIntegrator::new(max_depth).render(scene, &settings, &control).image
+}
+
+#[test]
+fn every_pbrt_scene_loads_and_renders() {
+    let Some(dir) = shared_scenes() else { return };
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let file = entry.unwrap().path().join("pbrt-v4/scene-v4.pbrt");
+        if !file.is_file() {
+            continue;
+        }
+        let loaded = load(&file, &LoadOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        let mut scene = loaded.builder.build().unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        scene.set_resolution(24, 16);
+        let img = render(&scene, 5, 1);
+        assert!(img.pixels.iter().all(|p| p.is_finite()), "{}", file.display());
+        assert!(img.pixels.iter().any(|p| p.max_element() > 0.0), "{} renders black", file.display());
+        count += 1;
+    }
+    assert!(count >= 5, "expected the five pbrt-v4 scenes, found {count}");
+}
+
+/// Averages `factor`×`factor` blocks.
+fn downsample(img: &Image, factor: usize) -> Image {
+    let (w, h) = (img.width / factor, img.height / factor);
+    let mut px = vec![Rgb::ZERO; w * h];
+    for y in 0..h * factor {
+        for x in 0..w * factor {
+            px[(y / factor) * w + x / factor] += img.get(x, y) / (factor * factor) as f32;
+        }
+    }
+    Image::new(w, h, px)
+}
+
+#[test]
+fn cornell_box_agrees_with_the_tungsten_reference() {
+    let Some(dir) = shared_scenes() else { return };
+    let dir = dir.join("cornell-box/pbrt-v4");
+    let mut scene = load(&dir.join("scene-v4.pbrt"), &LoadOptions::default()).unwrap().builder.build().unwrap();
+    let reference =
+        tempera_image::read_image(&dir.join("TungstenRender.exr"), tempera_image::ColorEncoding::Linear).unwrap();
+    let n = 128;
+    scene.set_resolution(n as u32, n as u32);
+    let ours = render(&scene, scene.defaults.max_depth, 128);
+    let reference = downsample(&reference, reference.width / n);
+    let block = 16;
+    let (mut worst, mut sum_ours, mut sum_ref) = (0.0f64, 0.0f64, 0.0f64);
+    for by in (0..n).step_by(block) {
+        for bx in (0..n).step_by(block) {
+            let values: Vec<f64> = (by..by + block)
+                .flat_map(|y| (bx..bx + block).map(move |x| (x, y)))
+                .map(|(x, y)| f64::from(luminance(ours.get(x, y))))
+                .collect();
+            let mean = values.iter().sum::<f64>() / values.len() as f64;
+            let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (values.len() - 1) as f64;
+            let se = (var / values.len() as f64).sqrt();
+            let r: f64 = (by..by + block)
+                .flat_map(|y| (bx..bx + block).map(move |x| (x, y)))
+                .map(|(x, y)| f64::from(luminance(reference.get(x, y))))
+                .sum::<f64>()
+                / values.len() as f64;
+            sum_ours += mean;
+            sum_ref += r;
+            // Relative deviation beyond noise: what the model differences cost per block.
+            let excess = ((mean - r).abs() - 3.0 * se).max(0.0) / r.max(1e-3);
+            worst = worst.max(excess);
+        }
+    }
+    let ratio = sum_ours / sum_ref;
+    eprintln!(
+        "cornell-box: image mean ratio ours/tungsten = {ratio:.4}; worst block excess beyond 3σ = {:.2}%",
+        worst * 100.0
+    );
+    assert!((ratio - 1.0).abs() < 0.03, "image means differ by {:.2}%", (ratio - 1.0) * 100.0);
+    assert!(worst < 0.05, "a block deviates {:.1}% beyond noise", worst * 100.0);
+}
