@@ -184,3 +184,34 @@ fn truncated_and_mutated_input_never_panics() {
         }
     }
 }
+
+#[test]
+fn mix_diffusetransmission_bump_and_alpha_load_without_approximation() {
+    let text = "Camera \"perspective\"\nWorldBegin\n\
+        Texture \"bumps\" \"float\" \"checkerboard\" \"float tex1\" 0 \"float tex2\" 0.01\n\
+        MakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n\
+        MakeNamedMaterial \"b\" \"string type\" \"conductor\" \"spectrum reflectance\" [ 400 0.9 700 0.9 ]\n\
+        MakeNamedMaterial \"m\" \"string type\" \"mix\" \"string materials\" [ \"a\" \"b\" ] \"float amount\" 0.3\n\
+        Material \"diffusetransmission\" \"rgb transmittance\" [ 0.5 0.4 0.3 ] \"texture displacement\" \"bumps\"\n\
+        Shape \"sphere\" \"float alpha\" 0.5\n\
+        NamedMaterial \"m\"\nShape \"disk\"\n";
+    let loaded = load_text(text).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let scene = loaded.builder.build().unwrap();
+    use tempera::material::{ConductorFresnel, Material};
+    let mix =
+        scene.materials.iter().find_map(|m| if let Material::Mix(m) = m { Some(m.clone()) } else { None }).unwrap();
+    assert_eq!(mix.amount.as_constant(), Some(Vec3::splat(0.3)));
+    assert!(matches!(&scene.materials[mix.materials[0] as usize], Material::Diffuse(_)));
+    match &scene.materials[mix.materials[1] as usize] {
+        Material::Conductor(c) => match &c.fresnel {
+            ConductorFresnel::Reflectance(r) => {
+                assert!((r.as_constant().unwrap() - Vec3::splat(0.9)).abs().max_element() < 1e-3)
+            }
+            other => panic!("expected the reflectance parametrisation, got {other:?}"),
+        },
+        other => panic!("expected a conductor, got {other:?}"),
+    }
+    assert!(scene.materials.iter().any(|m| matches!(m, Material::DiffuseTransmission(d)
+        if d.transmittance.as_constant() == Some(Vec3::new(0.5, 0.4, 0.3)))));
+}

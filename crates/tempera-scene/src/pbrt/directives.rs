@@ -400,7 +400,7 @@ impl Loader {
         self.info.instances += 1;
         for s in shapes {
             let shape = super::shapes::transformed(s.shape, &ctm);
-            self.add_shape(shape, &s.material, s.emission.clone());
+            self.add_shape(shape, &s.material, s.emission.clone(), s.alpha.clone());
         }
         Ok(())
     }
@@ -411,9 +411,10 @@ impl Loader {
         shape: tempera::geometry::Shape,
         material: &MaterialSlot,
         emission: Option<tempera::scene::AreaEmission>,
+        alpha: Option<tempera::texture::Texture>,
     ) {
         if let Some((_, shapes, _)) = &mut self.object {
-            shapes.push(super::state::ObjectShape { shape, material: material.clone(), emission });
+            shapes.push(super::state::ObjectShape { shape, material: material.clone(), emission, alpha });
             return;
         }
         let Some(id) = self.material_id(material) else { return };
@@ -421,6 +422,6 @@ impl Loader {
         if let tempera::geometry::Shape::Mesh(m) = &shape {
             self.info.triangles += m.indices.len();
         }
-        self.builder.add_shape(shape, id, emission);
+        self.builder.add_shape_with_alpha(shape, id, emission, alpha);
     }
 }

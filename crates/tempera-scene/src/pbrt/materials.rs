@@ -1,5 +1,6 @@
-//! pbrt-v4 materials translated into core materials. `diffuse`, `conductor` and `dielectric`
-//! map exactly. pbrt-v4's stochastic layered `coateddiffuse` is approximated by the analytic
+//! pbrt-v4 materials translated into core materials. `diffuse`, `diffusetransmission`,
+//! `conductor`, `dielectric` and `mix` map exactly, and `displacement` bump-maps any of them.
+//! pbrt-v4's stochastic layered `coateddiffuse` is approximated by the analytic
 //! coated-diffuse (plastic) model with the same coat index and roughness, and `coatedconductor`
 //! by its base conductor; these and other approximations are reported once per material type.
 
@@ -10,7 +11,8 @@ use super::textures::SpectrumUse;
 use crate::LoadError;
 use crate::diagnostics::Loc;
 use tempera::material::{
-    CoatedDiffuseMaterial, ConductorFresnel, ConductorMaterial, DielectricMaterial, Material, Roughness,
+    CoatedDiffuseMaterial, ConductorFresnel, ConductorMaterial, DielectricMaterial, DiffuseTransmissionMaterial,
+    Material, MixMaterial, Roughness,
 };
 use tempera::math::Rgb;
 use tempera::texture::Texture;
@@ -81,13 +83,10 @@ impl Loader {
     }
 
     pub(super) fn make_material(&mut self, ty: &str, params: &ParamSet, at: &Loc) -> Result<MaterialSlot, LoadError> {
-        if params.find("displacement").is_some() {
-            self.warn_once(
-                "displacement",
-                Some(at),
-                "bump mapping (\"displacement\") is not supported yet and is ignored",
-            )?;
-        }
+        let displacement = match params.params.iter().any(|p| p.name == "displacement") {
+            true => Some(self.float_param(params, "displacement", 0.0)?),
+            false => None,
+        };
         if params.find("normalmap").is_some() {
             self.warn_once("normalmap", Some(at), "normal maps are not supported yet and are ignored")?;
         }
@@ -138,13 +137,16 @@ impl Loader {
                 Material::Conductor(self.conductor(params, "conductor.")?)
             }
             "diffusetransmission" => {
-                self.approximated(ty, at, "diffuse reflection only (transmission is dropped)")?;
-                params.find("transmittance");
-                let r = self
-                    .spectrum_param(params, "reflectance", Some(Rgb::splat(0.25)), SpectrumUse::Unitless)?
-                    .expect("default");
-                let scale = params.float("scale", 1.0)? as f32;
-                Material::diffuse(Texture::Scale(Box::new((r, scale.into()))))
+                let unitless = SpectrumUse::Unitless;
+                Material::DiffuseTransmission(DiffuseTransmissionMaterial {
+                    reflectance: self
+                        .spectrum_param(params, "reflectance", Some(Rgb::splat(0.25)), unitless)?
+                        .expect("default"),
+                    transmittance: self
+                        .spectrum_param(params, "transmittance", Some(Rgb::splat(0.25)), unitless)?
+                        .expect("default"),
+                    scale: params.float("scale", 1.0)? as f32,
+                })
             }
             "mix" => {
                 let names = match params.find("materials").map(|p| &p.values) {
@@ -156,13 +158,23 @@ impl Loader {
                         });
                     }
                 };
-                let amount = self.float_param(params, "amount", 0.5)?.average().x;
-                self.approximated(ty, at, "the component with the larger average amount is used")?;
-                let chosen = if amount > 0.5 { &names[1] } else { &names[0] };
-                return self.named.materials.get(chosen).cloned().ok_or_else(|| LoadError::Syntax {
-                    loc: at.clone(),
-                    message: format!("mix refers to unknown material \"{chosen}\""),
-                });
+                let mut ids = [0u32; 2];
+                for (slot, name) in ids.iter_mut().zip(&names) {
+                    let m = self.named.materials.get(name).cloned().ok_or_else(|| LoadError::Syntax {
+                        loc: at.clone(),
+                        message: format!("mix refers to unknown material \"{name}\""),
+                    })?;
+                    *slot = match self.material_id(&m) {
+                        Some(id) => id.0,
+                        None => {
+                            return Err(LoadError::Syntax {
+                                loc: at.clone(),
+                                message: "mix of an \"interface\" material is not supported".into(),
+                            });
+                        }
+                    };
+                }
+                Material::Mix(MixMaterial { materials: ids, amount: self.float_param(params, "amount", 0.5)? })
             }
             "interface" => return Ok(MaterialSlot::Interface),
             "measured" | "hair" | "subsurface" => {
@@ -180,6 +192,10 @@ impl Loader {
             }
         };
         *self.info.materials.entry(ty.to_owned()).or_default() += 1;
-        Ok(MaterialSlot::Id(self.builder.add_material(material)))
+        let id = self.builder.add_material(material);
+        if let Some(d) = displacement {
+            self.builder.set_displacement(id, d);
+        }
+        Ok(MaterialSlot::Id(id))
     }
 }

@@ -272,18 +272,13 @@ impl Loader {
                 None
             }
         };
-        let alpha_is_opaque = match params.find("alpha") {
-            None => true,
-            Some(p) => matches!(&p.values, super::params::Values::Num(v) if v.first() == Some(&1.0)),
-        };
-        if !alpha_is_opaque {
-            self.warn_once("alpha", Some(&at), "alpha cut-outs are not supported yet; such surfaces render opaque")?;
-        }
+        let alpha = self.float_param(&params, "alpha", 1.0)?;
+        let alpha = if alpha.as_constant().is_some_and(|a| a.x >= 1.0) { None } else { Some(alpha) };
         self.report_unused(&params, &format!("Shape \"{ty}\""))?;
         if let Some(shape) = shape {
             let material = self.state.material.clone();
             let emission = self.state.area_light.clone();
-            self.add_shape(shape, &material, emission);
+            self.add_shape(shape, &material, emission, alpha);
         }
         Ok(())
     }

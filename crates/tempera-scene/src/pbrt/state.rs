@@ -38,6 +38,7 @@ pub struct ObjectShape {
     pub shape: Shape,
     pub material: MaterialSlot,
     pub emission: Option<AreaEmission>,
+    pub alpha: Option<Texture>,
 }
 
 #[derive(Default)]

@@ -50,8 +50,11 @@ impl Bvh {
         Self { tree: Some(tree) }
     }
 
+    /// The traversal ray. Negative zeros in the direction are made positive: the traversal
+    /// picks near and far planes from `d < 0` but inverts `-0.0` to a negative slope, and the
+    /// mismatch would make axis-aligned rays miss.
     fn bvh_ray(ray: &Ray, t_max: f32) -> BvhRay {
-        BvhRay::new(ray.o.into(), ray.d.into(), 0.0, t_max)
+        BvhRay::new(ray.o.into(), (ray.d + Vec3::ZERO).into(), 0.0, t_max)
     }
 }
 
@@ -134,6 +137,29 @@ mod tests {
             assert_eq!(bvh.occluded(&geometry, &ray, t_max), b.is_some());
         }
         assert!(hits > 2000, "too few hits ({hits}) for a meaningful test");
+    }
+
+    #[test]
+    fn axis_aligned_rays_with_negative_zero_components_hit() {
+        let quad = TriangleMesh::new(
+            vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(2.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+            None,
+            None,
+        )
+        .unwrap();
+        let mut g = Geometry::new(vec![Shape::Mesh(quad)]);
+        let bvh = Bvh::build(&mut g);
+        for d in [-Vec3::Z, Vec3::Z, Vec3::new(-0.0, 0.0, -1.0), Vec3::new(0.0, -0.0, 1.0)] {
+            let ray = Ray::new(Vec3::new(1.3, 0.4, 0.0) - d, d);
+            assert!(bvh.intersect(&g, &ray, f32::INFINITY).is_some(), "direction {d:?}");
+            assert!(bvh.occluded(&g, &ray, f32::INFINITY), "direction {d:?}");
+        }
     }
 
     #[test]

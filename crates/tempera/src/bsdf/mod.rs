@@ -5,6 +5,7 @@
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
+pub mod diffuse_transmission;
 pub mod fresnel;
 pub mod microfacet;
 pub mod plastic;
@@ -15,6 +16,7 @@ mod tests;
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
+pub use diffuse_transmission::DiffuseTransmission;
 pub use microfacet::Ggx;
 pub use plastic::Plastic;
 
@@ -49,6 +51,7 @@ pub(crate) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
 #[derive(Clone, Copy, Debug)]
 pub enum Bsdf {
     Diffuse(Diffuse),
+    DiffuseTransmission(DiffuseTransmission),
     Conductor(Conductor),
     Dielectric(Dielectric),
     Plastic(Plastic),
@@ -60,6 +63,7 @@ impl Bsdf {
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
         match self {
             Bsdf::Diffuse(b) => b.eval(wo, wi),
+            Bsdf::DiffuseTransmission(b) => b.eval(wo, wi),
             Bsdf::Conductor(b) => b.eval(wo, wi),
             Bsdf::Dielectric(b) => b.eval(wo, wi, mode),
             Bsdf::Plastic(b) => b.eval(wo, wi),
@@ -71,6 +75,7 @@ impl Bsdf {
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
+            Bsdf::DiffuseTransmission(b) => b.pdf(wo, wi),
             Bsdf::Conductor(b) => b.pdf(wo, wi),
             Bsdf::Dielectric(b) => b.pdf(wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
@@ -82,6 +87,7 @@ impl Bsdf {
     pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
         let s = match self {
             Bsdf::Diffuse(b) => b.sample(wo, u),
+            Bsdf::DiffuseTransmission(b) => b.sample(wo, uc, u),
             Bsdf::Conductor(b) => b.sample(wo, u),
             Bsdf::Dielectric(b) => b.sample(wo, uc, u, mode),
             Bsdf::Plastic(b) => b.sample(wo, uc, u),
@@ -93,7 +99,7 @@ impl Bsdf {
     #[inline]
     pub fn is_delta(&self) -> bool {
         match self {
-            Bsdf::Diffuse(_) | Bsdf::Plastic(_) => false,
+            Bsdf::Diffuse(_) | Bsdf::DiffuseTransmission(_) | Bsdf::Plastic(_) => false,
             Bsdf::Conductor(b) => b.distribution.effectively_smooth(),
             Bsdf::Dielectric(b) => b.is_delta(),
         }

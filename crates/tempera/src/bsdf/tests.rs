@@ -18,6 +18,13 @@ fn rough_bsdfs() -> Vec<(&'static str, Bsdf)> {
     vec![
         ("diffuse", Bsdf::Diffuse(Diffuse { reflectance: Rgb::new(0.8, 0.5, 0.2) })),
         (
+            "diffuse transmission",
+            Bsdf::DiffuseTransmission(DiffuseTransmission {
+                reflectance: Rgb::new(0.3, 0.4, 0.5),
+                transmittance: Rgb::new(0.6, 0.2, 0.1),
+            }),
+        ),
+        (
             "conductor 0.2",
             Bsdf::Conductor(Conductor {
                 distribution: Ggx::isotropic(0.2),
@@ -127,6 +134,14 @@ fn white_furnace_energy_is_at_most_one() {
     let (eta, k) = fresnel::conductor_from_reflectance(Rgb::ONE);
     let white: Vec<(&str, Bsdf, f64)> = vec![
         ("diffuse", Bsdf::Diffuse(Diffuse { reflectance: Rgb::ONE }), 0.999),
+        (
+            "diffuse transmission",
+            Bsdf::DiffuseTransmission(DiffuseTransmission {
+                reflectance: Rgb::splat(0.5),
+                transmittance: Rgb::splat(0.5),
+            }),
+            0.999,
+        ),
         ("conductor smooth", Bsdf::Conductor(Conductor { distribution: Ggx::isotropic(0.0), eta, k }), 0.99),
         ("conductor rough", Bsdf::Conductor(Conductor { distribution: Ggx::isotropic(0.3), eta, k }), 0.8),
         ("dielectric smooth", Bsdf::Dielectric(Dielectric { distribution: Ggx::isotropic(0.0), eta: 1.5 }), 0.999),

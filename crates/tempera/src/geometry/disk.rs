@@ -54,7 +54,10 @@ impl Disk {
         let n = if self.reverse_orientation { -self.frame.n } else { self.frame.n };
         let dpdu = self.frame.to_world(Vec3::new(-local.y, local.x, 0.0)) * 2.0 * PI;
         let dpdu = if dpdu.length_squared() > 0.0 { dpdu } else { self.frame.s };
-        SurfacePoint { p, ng: n, ns: n, uv, dpdu }
+        // v = 1 - r/R, so dp/dv points inwards with length R.
+        let radial = if dist > 0.0 { (p - self.center) / dist } else { self.frame.t };
+        let dpdv = -radial * self.radius;
+        SurfacePoint { p, ng: n, ns: n, uv, dpdu, dpdv }
     }
 
     pub fn sample_area(&self, u: Vec2) -> ShapeSample {

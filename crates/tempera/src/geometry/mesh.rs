@@ -102,9 +102,13 @@ impl TriangleMesh {
         let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
         let (dp02, dp12) = (p0 - p2, p1 - p2);
         let det = duv02.x * duv12.y - duv02.y * duv12.x;
-        let mut dpdu = if det.abs() < 1e-12 { Vec3::ZERO } else { (duv12.y * dp02 - duv02.y * dp12) / det };
-        if !dpdu.is_finite() {
-            dpdu = Vec3::ZERO;
+        let (mut dpdu, mut dpdv) = if det.abs() < 1e-12 {
+            (Vec3::ZERO, Vec3::ZERO)
+        } else {
+            ((duv12.y * dp02 - duv02.y * dp12) / det, (duv02.x * dp12 - duv12.x * dp02) / det)
+        };
+        if !dpdu.is_finite() || !dpdv.is_finite() {
+            (dpdu, dpdv) = (Vec3::ZERO, Vec3::ZERO);
         }
         let ns = match &self.normals {
             Some(n) => {
@@ -122,7 +126,13 @@ impl TriangleMesh {
                 (ng, ng)
             }
         };
-        SurfacePoint { p, ng, ns, uv: uv_hit, dpdu }
+        SurfacePoint { p, ng, ns, uv: uv_hit, dpdu, dpdv }
+    }
+
+    /// Texture coordinates at barycentrics `b` of triangle `tri`.
+    pub fn uv_at(&self, tri: u32, b: Vec3) -> Vec2 {
+        let uv = self.uvs_of(tri);
+        b.x * uv[0] + b.y * uv[1] + b.z * uv[2]
     }
 
     /// Uniform area sample on triangle `tri`: the surface point and the area density.
@@ -155,6 +165,7 @@ mod tests {
         assert!((s.uv - Vec2::new(0.75, 0.25)).length() < 1e-6);
         assert_eq!(s.ng, Vec3::Z, "counter-clockwise faces +z");
         assert!((s.dpdu - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-5, "dp/du follows the uv layout");
+        assert!((s.dpdv - Vec3::new(0.0, 1.0, 0.0)).length() < 1e-5, "dp/dv follows the uv layout");
         m.reverse_orientation = true;
         assert_eq!(m.surface(0, Vec3::splat(1.0 / 3.0)).ng, -Vec3::Z);
         // Shading normals win over the winding: the geometric normal is flipped towards them.

@@ -14,6 +14,7 @@ pub use sphere::{ShapeSample, Sphere};
 pub use triangle::{RayShear, intersect_triangle};
 
 use crate::math::{Vec2, Vec3};
+use crate::texture::Texture;
 
 /// Geometric data of a surface point.
 #[derive(Clone, Copy, Debug)]
@@ -25,6 +26,7 @@ pub struct SurfacePoint {
     pub ns: Vec3,
     pub uv: Vec2,
     pub dpdu: Vec3,
+    pub dpdv: Vec3,
 }
 
 /// A shape as stored in the scene.
@@ -68,6 +70,8 @@ pub struct Geometry {
     pub prims: Vec<PrimRef>,
     /// Vertices of triangle primitives (`None` for analytic shapes), aligned with `prims`.
     triangles: Vec<Option<[Vec3; 3]>>,
+    /// Alpha (cut-out) texture per shape; empty when no shape has one.
+    alpha: Vec<Option<Texture>>,
 }
 
 impl Geometry {
@@ -79,7 +83,7 @@ impl Geometry {
                 (0..shape.primitive_count() as u32).map(move |index| PrimRef { shape: s as u32, index })
             })
             .collect();
-        let mut g = Self { shapes, prims, triangles: Vec::new() };
+        let mut g = Self { shapes, prims, triangles: Vec::new(), alpha: Vec::new() };
         g.cache_triangles();
         g
     }
@@ -116,15 +120,55 @@ impl Geometry {
         }
     }
 
+    /// Gives shape `shape` an alpha texture: hits where it is 0 are ignored, where it is
+    /// between 0 and 1 they are kept with that probability (decided by a hash of the ray, so
+    /// every ray sees a consistent surface), as pbrt-v4 does.
+    pub fn set_alpha(&mut self, shape: usize, alpha: Texture) {
+        if self.alpha.is_empty() {
+            self.alpha = vec![None; self.shapes.len()];
+        }
+        self.alpha[shape] = Some(alpha);
+    }
+
+    fn alpha_keeps(&self, i: u32, ray: &Ray, t: f32, b: Vec3) -> bool {
+        let r = self.prims[i as usize];
+        let Some(alpha) = &self.alpha[r.shape as usize] else { return true };
+        let uv = match &self.shapes[r.shape as usize] {
+            Shape::Mesh(m) => m.uv_at(r.index, b),
+            Shape::Sphere(s) => s.surface(ray.at(t)).uv,
+            Shape::Disk(d) => d.surface(ray.at(t)).uv,
+        };
+        let a = alpha.eval_float(uv);
+        if a >= 1.0 {
+            return true;
+        }
+        if a.is_nan() || a <= 0.0 {
+            return false;
+        }
+        let bits =
+            |v: Vec3| (u64::from(v.x.to_bits()) << 32) ^ (u64::from(v.y.to_bits()) << 16) ^ u64::from(v.z.to_bits());
+        let u = (crate::math::rng::hash(&[bits(ray.o), bits(ray.d)]) >> 40) as f32 / (1u64 << 24) as f32;
+        u < a
+    }
+
     /// Intersects primitive `i`, returning the distance and hit parameters.
     #[inline]
     pub fn intersect_prim(&self, i: u32, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<(f32, Vec3)> {
-        let r = self.prims[i as usize];
-        match &self.shapes[r.shape as usize] {
-            Shape::Mesh(m) => intersect_triangle(ray, shear, m.vertices(r.index), t_max).map(|h| (h.t, h.b)),
-            Shape::Sphere(s) => s.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
-            Shape::Disk(d) => d.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
+        let hit = match self.triangles[i as usize] {
+            Some(tri) => intersect_triangle(ray, shear, tri, t_max).map(|h| (h.t, h.b)),
+            None => {
+                let r = self.prims[i as usize];
+                match &self.shapes[r.shape as usize] {
+                    Shape::Sphere(s) => s.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
+                    Shape::Disk(d) => d.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
+                    Shape::Mesh(_) => None,
+                }
+            }
+        }?;
+        if !self.alpha.is_empty() && !self.alpha_keeps(i, ray, hit.0, hit.1) {
+            return None;
         }
+        Some(hit)
     }
 
     /// Surface data at a hit found by an accelerator.

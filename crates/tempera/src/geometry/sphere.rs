@@ -71,8 +71,10 @@ impl Sphere {
         if dpdu.length_squared() < 1e-12 {
             dpdu = Frame::from_z(n).s;
         }
+        // v = 1 - θ/π, so dp/dv = -π · dp/dθ.
+        let dpdv = -PI * self.radius * Vec3::new(n.z * phi.cos(), n.z * phi.sin(), -theta.sin());
         let n = if self.reverse_orientation { -n } else { n };
-        SurfacePoint { p, ng: n, ns: n, uv, dpdu }
+        SurfacePoint { p, ng: n, ns: n, uv, dpdu, dpdv }
     }
 
     /// Uniform sample over the whole surface, density per unit area.

@@ -1,7 +1,9 @@
 //! Materials: textured parameters that produce a [`Bsdf`] at a surface point (pbrt-v4 §10.5).
 
 use crate::bsdf::plastic::PlasticCoat;
-use crate::bsdf::{Bsdf, Conductor, Dielectric, Diffuse, Ggx, Plastic, fresnel};
+use crate::bsdf::{Bsdf, Conductor, Dielectric, Diffuse, DiffuseTransmission, Ggx, Plastic, fresnel};
+use crate::math::Vec3;
+use crate::math::rng::{hash, mix64};
 use crate::math::{Rgb, Vec2};
 use crate::texture::Texture;
 
@@ -75,11 +77,48 @@ impl CoatedDiffuseMaterial {
 }
 
 #[derive(Clone, Debug)]
+pub struct DiffuseTransmissionMaterial {
+    pub reflectance: Texture,
+    pub transmittance: Texture,
+    pub scale: f32,
+}
+
+/// pbrt-v4's `mix`: at each shading point one of two materials is chosen, the second with
+/// probability `amount`, by a hash of the point and direction (so a given path is deterministic).
+#[derive(Clone, Debug)]
+pub struct MixMaterial {
+    pub materials: [u32; 2],
+    pub amount: Texture,
+}
+
+impl MixMaterial {
+    /// The material index used at `p` seen from `wo`.
+    pub fn choose(&self, uv: Vec2, p: Vec3, wo: Vec3) -> u32 {
+        let amount = self.amount.eval_float(uv);
+        if amount <= 0.0 {
+            return self.materials[0];
+        }
+        if amount >= 1.0 {
+            return self.materials[1];
+        }
+        let bits =
+            |v: Vec3| (u64::from(v.x.to_bits()) << 32) ^ (u64::from(v.y.to_bits()) << 16) ^ u64::from(v.z.to_bits());
+        let u = (mix64(hash(&[bits(p), bits(wo), u64::from(self.materials[0]), u64::from(self.materials[1])])) >> 40)
+            as f32
+            / (1u64 << 24) as f32;
+        if u < amount { self.materials[1] } else { self.materials[0] }
+    }
+}
+
+#[derive(Clone, Debug)]
 pub enum Material {
     Diffuse(DiffuseMaterial),
+    DiffuseTransmission(DiffuseTransmissionMaterial),
     Conductor(ConductorMaterial),
     Dielectric(DielectricMaterial),
     CoatedDiffuse(CoatedDiffuseMaterial),
+    /// Resolved by the scene, which knows the other materials (see `Scene::bsdf`).
+    Mix(MixMaterial),
 }
 
 impl Material {
@@ -87,9 +126,15 @@ impl Material {
         Material::Diffuse(DiffuseMaterial { reflectance: reflectance.into() })
     }
 
-    /// The BSDF at texture coordinates `uv`.
+    /// The BSDF at texture coordinates `uv`. A `Mix` must be resolved to one of its materials
+    /// first; unresolved it is black.
     pub fn bsdf(&self, uv: Vec2) -> Bsdf {
         match self {
+            Material::DiffuseTransmission(m) => Bsdf::DiffuseTransmission(DiffuseTransmission {
+                reflectance: (m.reflectance.eval(uv) * m.scale).clamp(Rgb::ZERO, Rgb::ONE),
+                transmittance: (m.transmittance.eval(uv) * m.scale).clamp(Rgb::ZERO, Rgb::ONE),
+            }),
+            Material::Mix(_) => Bsdf::Diffuse(Diffuse { reflectance: Rgb::ZERO }),
             Material::Diffuse(m) => {
                 Bsdf::Diffuse(Diffuse { reflectance: m.reflectance.eval(uv).clamp(Rgb::ZERO, Rgb::ONE) })
             }

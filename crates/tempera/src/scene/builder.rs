@@ -57,6 +57,8 @@ pub struct SceneBuilder {
     shape_material: Vec<u32>,
     shape_emission: Vec<Option<AreaEmission>>,
     materials: Vec<Material>,
+    displacement: Vec<Option<Texture>>,
+    shape_alpha: Vec<Option<Texture>>,
     lights: Vec<Light>,
     camera: Option<CameraDesc>,
     film: FilmDesc,
@@ -70,14 +72,35 @@ impl SceneBuilder {
 
     pub fn add_material(&mut self, material: Material) -> MaterialId {
         self.materials.push(material);
+        self.displacement.push(None);
         MaterialId(self.materials.len() as u32 - 1)
+    }
+
+    /// Bump-maps a material with a float displacement texture.
+    pub fn set_displacement(&mut self, material: MaterialId, displacement: Texture) {
+        if let Some(d) = self.displacement.get_mut(material.0 as usize) {
+            *d = Some(displacement);
+        }
     }
 
     /// Adds a shape with a material and, optionally, area emission.
     pub fn add_shape(&mut self, shape: Shape, material: MaterialId, emission: Option<AreaEmission>) {
+        self.add_shape_with_alpha(shape, material, emission, None);
+    }
+
+    /// Adds a shape whose float texture `alpha` cuts it out where it is below one
+    /// (stochastically between zero and one).
+    pub fn add_shape_with_alpha(
+        &mut self,
+        shape: Shape,
+        material: MaterialId,
+        emission: Option<AreaEmission>,
+        alpha: Option<Texture>,
+    ) {
         self.shapes.push(shape);
         self.shape_material.push(material.0);
         self.shape_emission.push(emission);
+        self.shape_alpha.push(alpha);
     }
 
     /// Adds a non-area light (point, spot, distant, infinite).
@@ -106,6 +129,17 @@ impl SceneBuilder {
                 return Err(SceneError::UnknownMaterial { shape, material, count: self.materials.len() });
             }
         }
+        for m in &self.materials {
+            if let Material::Mix(mix) = m
+                && let Some(&bad) = mix.materials.iter().find(|&&i| i as usize >= self.materials.len())
+            {
+                return Err(SceneError::UnknownMaterial {
+                    shape: usize::MAX,
+                    material: bad,
+                    count: self.materials.len(),
+                });
+            }
+        }
         for (i, shape) in self.shapes.iter().enumerate() {
             let bad = match shape {
                 Shape::Sphere(s) => !(s.radius > 0.0 && s.radius.is_finite() && s.center.is_finite()),
@@ -123,6 +157,11 @@ impl SceneBuilder {
         self.validate()?;
         let camera_desc = self.camera.ok_or(SceneError::NoCamera)?;
         let mut geometry = Geometry::new(self.shapes);
+        for (shape, alpha) in self.shape_alpha.into_iter().enumerate() {
+            if let Some(alpha) = alpha {
+                geometry.set_alpha(shape, alpha);
+            }
+        }
         let accel = Bvh::build(&mut geometry);
         let bounds = geometry.world_bounds();
 
@@ -147,6 +186,7 @@ impl SceneBuilder {
             geometry,
             accel,
             materials: self.materials,
+            displacement: self.displacement,
             shape_material: self.shape_material,
             prim_light,
             light_sampler: LightSampler::new(&powers),

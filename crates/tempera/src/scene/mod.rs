@@ -2,6 +2,8 @@
 //! [`SceneBuilder`] through which loaders and built-in scenes create it.
 
 mod builder;
+#[cfg(test)]
+mod tests;
 
 pub use builder::{AreaEmission, MaterialId, RenderDefaults, SceneBuilder, SceneError};
 
@@ -14,9 +16,34 @@ use crate::light::{Light, LightSampler};
 use crate::material::Material;
 use crate::math::frame::Frame;
 use crate::math::{Rgb, Vec3};
+use crate::texture::Texture;
 
 /// Sentinel for "no light" in the per-primitive light table.
 const NO_LIGHT: u32 = u32::MAX;
+
+/// Nesting limit when resolving `mix` materials.
+const MAX_MIX_DEPTH: usize = 16;
+
+/// Parametric step of the finite differences in bump mapping (pbrt-v4's fallback when ray
+/// differentials are unavailable).
+const BUMP_STEP: f32 = 5e-4;
+
+/// The shading frame perturbed by the displacement texture `d` (Blinn 1978; pbrt-v4 §10.5.3):
+/// `∂p'/∂u = ∂p/∂u + (∂d/∂u) n`, likewise for v, `n' = ∂p'/∂u × ∂p'/∂v` on the side of `n`.
+fn bump(d: &Texture, s: &SurfacePoint) -> Frame {
+    let base = Frame::from_normal_tangent(s.ns, s.dpdu);
+    let usable = |v: Vec3| v.length_squared() > 0.0 && v.is_finite();
+    let (dpdu, dpdv) = if usable(s.dpdu) && usable(s.dpdv) { (s.dpdu, s.dpdv) } else { (base.s, base.t) };
+    let d0 = d.eval_float(s.uv);
+    let du = (d.eval_float(s.uv + crate::math::Vec2::new(BUMP_STEP, 0.0)) - d0) / BUMP_STEP;
+    let dv = (d.eval_float(s.uv + crate::math::Vec2::new(0.0, BUMP_STEP)) - d0) / BUMP_STEP;
+    let (pu, pv) = (dpdu + du * s.ns, dpdv + dv * s.ns);
+    let n = pu.cross(pv).normalize_or_zero();
+    if n == Vec3::ZERO || !n.is_finite() {
+        return base;
+    }
+    Frame::from_normal_tangent(if n.dot(s.ns) < 0.0 { -n } else { n }, pu)
+}
 
 /// A ray's hit with everything shading needs.
 #[derive(Clone, Copy, Debug)]
@@ -33,6 +60,8 @@ pub struct Scene {
     pub geometry: Geometry,
     accel: Bvh,
     pub materials: Vec<Material>,
+    /// Bump-map displacement per material.
+    displacement: Vec<Option<Texture>>,
     shape_material: Vec<u32>,
     prim_light: Vec<u32>,
     pub lights: Vec<Light>,
@@ -83,15 +112,28 @@ impl Scene {
         }
     }
 
-    /// The BSDF at a hit, placed in its shading frame.
+    /// The material at a hit, with `mix` materials resolved.
+    fn resolve_material(&self, it: &Interaction) -> u32 {
+        let mut index = it.material;
+        for _ in 0..MAX_MIX_DEPTH {
+            match &self.materials[index as usize] {
+                Material::Mix(m) => index = m.choose(it.surface.uv, it.surface.p, it.wo),
+                _ => break,
+            }
+        }
+        index
+    }
+
+    /// The BSDF at a hit, placed in its (possibly bump-mapped) shading frame.
     #[inline]
     pub fn bsdf(&self, it: &Interaction) -> SurfaceBsdf {
         let s = &it.surface;
-        SurfaceBsdf {
-            bsdf: self.materials[it.material as usize].bsdf(s.uv),
-            frame: Frame::from_normal_tangent(s.ns, s.dpdu),
-            ng: s.ng,
-        }
+        let material = self.resolve_material(it) as usize;
+        let frame = match &self.displacement[material] {
+            Some(d) => bump(d, s),
+            None => Frame::from_normal_tangent(s.ns, s.dpdu),
+        };
+        SurfaceBsdf { bsdf: self.materials[material].bsdf(s.uv), frame, ng: s.ng }
     }
 
     /// Radius of the bounding sphere of the geometry.
