@@ -33,7 +33,8 @@ fn full_fixture_loads_every_directive_family() {
 
     let info = &loaded.info;
     assert_eq!(info.files, 2, "the include counts");
-    assert_eq!((info.shapes, info.instances, info.textures), (8, 2, 3));
+    // The object's quad is stored once and placed twice.
+    assert_eq!((info.shapes, info.instances, info.textures), (7, 2, 3));
     assert_eq!(info.materials.get("conductor"), Some(&2));
     assert_eq!(info.materials.get("dielectric"), Some(&1));
     for light in ["infinite", "distant", "point", "spot"] {
@@ -41,6 +42,7 @@ fn full_fixture_loads_every_directive_family() {
     }
 
     let scene = loaded.builder.build().unwrap();
+    assert_eq!((scene.geometry.prototypes.len(), scene.geometry.instances.len()), (1, 2), "instances share geometry");
     assert_eq!((scene.film.width, scene.film.height), (64, 48));
     assert_eq!((scene.defaults.spp, scene.defaults.max_depth), (8, 7));
     assert_eq!(scene.defaults.output.as_deref(), Some("fixture.exr"));

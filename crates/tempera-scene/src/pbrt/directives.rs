@@ -225,7 +225,8 @@ impl Loader {
                 let Some((n, shapes, _)) = self.object.take() else {
                     return Err(LoadError::Syntax { loc, message: "ObjectEnd without ObjectBegin".into() });
                 };
-                self.named.objects.insert(n, shapes);
+                let prototype = self.make_prototype(shapes, &loc)?;
+                self.named.objects.insert(n, prototype);
                 self.end(Block::Attribute, &loc)?;
             }
             "ObjectInstance" => {
@@ -392,15 +393,51 @@ impl Loader {
         self.report_unused(&params, &format!("PixelFilter \"{ty}\""))
     }
 
+    /// Turns the shapes of an object definition into a prototype stored once.
+    fn make_prototype(
+        &mut self,
+        shapes: Vec<super::state::ObjectShape>,
+        loc: &Loc,
+    ) -> Result<Option<tempera::scene::PrototypeId>, LoadError> {
+        let mut parts = Vec::with_capacity(shapes.len());
+        for s in shapes {
+            if s.emission.is_some() {
+                self.warn_once(
+                    "instance-emission",
+                    Some(loc),
+                    "area lights inside object instances are not supported (pbrt-v4 refuses them too); their emission is dropped",
+                )?;
+            }
+            let Some(material) = self.material_id(&s.material) else { continue };
+            self.info.shapes += 1;
+            if let tempera::geometry::Shape::Mesh(m) = &s.shape {
+                self.info.triangles += m.indices.len();
+            }
+            parts.push((s.shape, material, s.alpha));
+        }
+        Ok((!parts.is_empty()).then(|| self.builder.add_prototype(parts)))
+    }
+
     fn instance(&mut self, name: &str, at: &Loc) -> Result<(), LoadError> {
-        let Some(shapes) = self.named.objects.get(name).cloned() else {
+        let Some(prototype) = self.named.objects.get(name).copied() else {
             return Err(LoadError::Syntax { loc: at.clone(), message: format!("unknown object \"{name}\"") });
         };
-        let ctm = self.state.ctm;
+        if self.object.is_some() {
+            return Err(LoadError::Syntax {
+                loc: at.clone(),
+                message: "ObjectInstance inside ObjectBegin is not supported".into(),
+            });
+        }
         self.info.instances += 1;
-        for s in shapes {
-            let shape = super::shapes::transformed(s.shape, &ctm);
-            self.add_shape(shape, &s.material, s.emission.clone(), s.alpha.clone());
+        if let Some(prototype) = prototype {
+            let m = self.state.ctm;
+            if !m.is_finite() || m.determinant().abs() < 1e-20 {
+                return Err(LoadError::Syntax {
+                    loc: at.clone(),
+                    message: "ObjectInstance with a singular transformation".into(),
+                });
+            }
+            self.builder.add_instance(prototype, m);
         }
         Ok(())
     }

@@ -11,7 +11,7 @@ use crate::LoadError;
 use crate::diagnostics::Loc;
 use std::f32::consts::TAU;
 use tempera::geometry::{Disk, Shape, Sphere, TriangleMesh};
-use tempera::math::{Mat4, Vec2, Vec3};
+use tempera::math::{Vec2, Vec3};
 
 /// Segments around the axis of tessellated quadrics.
 const SEGMENTS: u32 = 96;
@@ -73,53 +73,6 @@ fn cylinder_mesh(radius: f32, zmin: f32, zmax: f32, phi_max: f32) -> TriangleMes
         let n = Vec3::new(phi.cos(), phi.sin(), 0.0);
         (n * radius + Vec3::Z * (zmin + (zmax - zmin) * v), n)
     })
-}
-
-/// Applies `m` to a world-space shape (used to place object instances).
-pub(super) fn transformed(shape: Shape, m: &Mat4) -> Shape {
-    let flips = m.determinant() < 0.0;
-    match shape {
-        Shape::Mesh(mut mesh) => {
-            mesh.transform(m);
-            Shape::Mesh(mesh)
-        }
-        Shape::Sphere(s) => match uniform_scale(m) {
-            Some(k) => Shape::Sphere(Sphere {
-                center: m.transform_point3(s.center),
-                radius: s.radius * k,
-                reverse_orientation: s.reverse_orientation ^ flips,
-            }),
-            None => {
-                let mut mesh = sphere_mesh(s.radius, -s.radius, s.radius, TAU);
-                mesh.reverse_orientation = s.reverse_orientation;
-                mesh.transform(&(*m * Mat4::from_translation(s.center)));
-                Shape::Mesh(mesh)
-            }
-        },
-        Shape::Disk(d) => match uniform_scale(m) {
-            Some(k) => {
-                let mut disk = Disk::new(
-                    m.transform_point3(d.center),
-                    m.inverse().transpose().transform_vector3(d.frame.n),
-                    d.radius * k,
-                );
-                disk.reverse_orientation = d.reverse_orientation ^ flips;
-                Shape::Disk(disk)
-            }
-            None => {
-                let mut mesh = disk_mesh(0.0, d.radius, 0.0, TAU);
-                mesh.reverse_orientation = d.reverse_orientation;
-                let frame = Mat4::from_cols(
-                    d.frame.s.extend(0.0),
-                    d.frame.t.extend(0.0),
-                    d.frame.n.extend(0.0),
-                    d.center.extend(1.0),
-                );
-                mesh.transform(&(*m * frame));
-                Shape::Mesh(mesh)
-            }
-        },
-    }
 }
 
 impl Loader {

@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use tempera::geometry::Shape;
 use tempera::math::{Mat4, Vec3};
-use tempera::scene::{AreaEmission, MaterialId};
+use tempera::scene::{AreaEmission, MaterialId, PrototypeId};
 use tempera::texture::Texture;
 
 /// The material a shape receives.
@@ -47,7 +47,8 @@ pub struct Named {
     pub float_textures: HashMap<String, Texture>,
     pub spectrum_textures: HashMap<String, Texture>,
     pub coord_systems: HashMap<String, Mat4>,
-    pub objects: HashMap<String, Vec<ObjectShape>>,
+    /// Object definitions; `None` for objects with nothing visible in them.
+    pub objects: HashMap<String, Option<PrototypeId>>,
 }
 
 /// pbrt's `Rotate`: `angle` degrees about `axis`.

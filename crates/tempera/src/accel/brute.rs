@@ -12,9 +12,9 @@ impl Accel for BruteForce {
         let mut best: Option<PrimHit> = None;
         let mut t_best = t_max;
         for i in 0..geometry.prims.len() as u32 {
-            if let Some((t, b)) = geometry.intersect_prim(i, ray, &shear, t_best) {
-                t_best = t;
-                best = Some(PrimHit { prim: i, t, b });
+            if let Some(hit) = geometry.intersect_prim(i, ray, &shear, t_best) {
+                t_best = hit.t;
+                best = Some(hit);
             }
         }
         best

@@ -20,6 +20,7 @@ impl obvhs::Boundable for Bounds {
 }
 
 /// The default accelerator.
+#[derive(Clone, Debug, Default)]
 pub struct Bvh {
     tree: Option<CwBvh>,
 }
@@ -66,9 +67,9 @@ impl Accel for Bvh {
         let mut hit = obvhs::ray::RayHit::none();
         tree.ray_traverse(Self::bvh_ray(ray, t_max), &mut hit, |r, id| {
             match geometry.intersect_prim(id as u32, ray, &shear, r.tmax) {
-                Some((t, b)) => {
-                    best = Some(PrimHit { prim: id as u32, t, b });
-                    t
+                Some(hit) => {
+                    best = Some(hit);
+                    hit.t
                 }
                 None => f32::INFINITY,
             }
@@ -82,7 +83,7 @@ impl Accel for Bvh {
         };
         let shear = RayShear::new(ray);
         !tree.ray_traverse_miss(Self::bvh_ray(ray, t_max), |_, id| {
-            geometry.intersect_prim(id as u32, ray, &shear, t_max).map_or(f32::INFINITY, |(t, _)| t)
+            geometry.intersect_prim(id as u32, ray, &shear, t_max).map_or(f32::INFINITY, |h| h.t)
         })
     }
 }

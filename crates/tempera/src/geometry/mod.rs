@@ -2,12 +2,14 @@
 //! primitives the accelerator indexes.
 
 pub mod disk;
+pub mod instance;
 pub mod mesh;
 pub mod ray;
 pub mod sphere;
 pub mod triangle;
 
 pub use disk::Disk;
+pub use instance::{Instance, Prototype};
 pub use mesh::{MeshError, TriangleMesh};
 pub use ray::{Ray, spawn_ray, spawn_ray_to};
 pub use sphere::{ShapeSample, Sphere};
@@ -60,7 +62,12 @@ pub struct PrimHit {
     pub prim: u32,
     pub t: f32,
     pub b: Vec3,
+    /// For an instance, the primitive hit inside its prototype.
+    pub inner: u32,
 }
+
+/// `PrimRef::shape` of a primitive that is an object instance (`index` is the instance).
+pub const INSTANCE: u32 = u32::MAX;
 
 /// All shapes of a scene and the primitive table over them. Triangle vertices are also cached
 /// per primitive, in primitive order, so that intersection tests read one contiguous record.
@@ -72,6 +79,8 @@ pub struct Geometry {
     triangles: Vec<Option<[Vec3; 3]>>,
     /// Alpha (cut-out) texture per shape; empty when no shape has one.
     alpha: Vec<Option<Texture>>,
+    pub prototypes: Vec<Prototype>,
+    pub instances: Vec<Instance>,
 }
 
 impl Geometry {
@@ -83,7 +92,7 @@ impl Geometry {
                 (0..shape.primitive_count() as u32).map(move |index| PrimRef { shape: s as u32, index })
             })
             .collect();
-        let mut g = Self { shapes, prims, triangles: Vec::new(), alpha: Vec::new() };
+        let mut g = Self { shapes, prims, ..Self::default() };
         g.cache_triangles();
         g
     }
@@ -92,15 +101,37 @@ impl Geometry {
         self.triangles = self
             .prims
             .iter()
-            .map(|r| match &self.shapes[r.shape as usize] {
-                Shape::Mesh(m) => Some(m.vertices(r.index)),
-                Shape::Sphere(_) | Shape::Disk(_) => None,
+            .map(|r| match self.shapes.get(r.shape as usize) {
+                Some(Shape::Mesh(m)) => Some(m.vertices(r.index)),
+                Some(Shape::Sphere(_) | Shape::Disk(_)) | None => None,
             })
             .collect();
     }
 
+    /// Adds instances of prototypes as primitives.
+    pub fn add_instances(&mut self, prototypes: Vec<Prototype>, instances: Vec<Instance>) {
+        let first = self.instances.len() as u32;
+        self.prims.extend((0..instances.len() as u32).map(|k| PrimRef { shape: INSTANCE, index: first + k }));
+        self.triangles.extend(instances.iter().map(|_| None));
+        self.prototypes.extend(prototypes);
+        self.instances.extend(instances);
+    }
+
+    /// The instance primitive `i` places, if it is one.
+    #[inline]
+    pub fn instance(&self, i: u32) -> Option<(&Instance, &Prototype)> {
+        let r = self.prims[i as usize];
+        (r.shape == INSTANCE).then(|| {
+            let inst = &self.instances[r.index as usize];
+            (inst, &self.prototypes[inst.prototype as usize])
+        })
+    }
+
     /// Axis-aligned bounds of primitive `i`.
     pub fn bounds(&self, i: usize) -> (Vec3, Vec3) {
+        if let Some((inst, proto)) = self.instance(i as u32) {
+            return inst.bounds(proto);
+        }
         let r = self.prims[i];
         match &self.shapes[r.shape as usize] {
             Shape::Mesh(m) => {
@@ -153,11 +184,15 @@ impl Geometry {
 
     /// Intersects primitive `i`, returning the distance and hit parameters.
     #[inline]
-    pub fn intersect_prim(&self, i: u32, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<(f32, Vec3)> {
+    pub fn intersect_prim(&self, i: u32, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<PrimHit> {
         let hit = match self.triangles[i as usize] {
             Some(tri) => intersect_triangle(ray, shear, tri, t_max).map(|h| (h.t, h.b)),
             None => {
                 let r = self.prims[i as usize];
+                if r.shape == INSTANCE {
+                    let (inst, proto) = self.instance(i)?;
+                    return inst.intersect(proto, ray, t_max).map(|h| PrimHit { prim: i, ..h });
+                }
                 match &self.shapes[r.shape as usize] {
                     Shape::Sphere(s) => s.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
                     Shape::Disk(d) => d.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
@@ -168,11 +203,14 @@ impl Geometry {
         if !self.alpha.is_empty() && !self.alpha_keeps(i, ray, hit.0, hit.1) {
             return None;
         }
-        Some(hit)
+        Some(PrimHit { prim: i, t: hit.0, b: hit.1, inner: 0 })
     }
 
     /// Surface data at a hit found by an accelerator.
     pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> SurfacePoint {
+        if let Some((inst, proto)) = self.instance(hit.prim) {
+            return inst.surface(proto, ray, hit);
+        }
         let r = self.prims[hit.prim as usize];
         match &self.shapes[r.shape as usize] {
             Shape::Mesh(m) => m.surface(r.index, hit.b),
@@ -181,9 +219,12 @@ impl Geometry {
         }
     }
 
-    /// Surface area of primitive `i`.
+    /// Surface area of primitive `i` (instances, which never emit, report zero).
     pub fn area(&self, i: u32) -> f32 {
         let r = self.prims[i as usize];
+        if r.shape == INSTANCE {
+            return 0.0;
+        }
         match &self.shapes[r.shape as usize] {
             Shape::Mesh(m) => m.area(r.index),
             Shape::Sphere(s) => s.area(),
@@ -195,6 +236,9 @@ impl Geometry {
     /// angle at `reference`.
     pub fn sample_from(&self, i: u32, reference: Vec3, u: Vec2) -> Option<ShapeSample> {
         let r = self.prims[i as usize];
+        if r.shape == INSTANCE {
+            return None;
+        }
         let area_sample = match &self.shapes[r.shape as usize] {
             Shape::Sphere(s) => return s.sample_from(reference, u),
             Shape::Mesh(m) => {
@@ -215,6 +259,9 @@ impl Geometry {
     /// Solid-angle density of [`Self::sample_from`] for the point `hit` on primitive `i`.
     pub fn pdf_from(&self, i: u32, reference: Vec3, hit: &SurfacePoint) -> f32 {
         let r = self.prims[i as usize];
+        if r.shape == INSTANCE {
+            return 0.0;
+        }
         if let Shape::Sphere(s) = &self.shapes[r.shape as usize] {
             return s.pdf_from(reference, hit);
         }

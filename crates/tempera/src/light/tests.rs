@@ -30,10 +30,7 @@ fn area_pdf(geometry: &Geometry, light: &AreaLight, reference: Vec3, w: Vec3) ->
     let ray = Ray::new(reference, w);
     let prim = light.prim;
     match geometry.intersect_prim(prim, &ray, &RayShear::new(&ray), f32::INFINITY) {
-        Some((t, b)) => {
-            let hit = geometry.surface(&ray, &crate::geometry::PrimHit { prim, t, b });
-            f64::from(light.pdf_li(geometry, reference, &hit))
-        }
+        Some(hit) => f64::from(light.pdf_li(geometry, reference, &geometry.surface(&ray, &hit))),
         None => 0.0,
     }
 }

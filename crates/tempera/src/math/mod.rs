@@ -6,7 +6,7 @@ pub mod frame;
 pub mod rng;
 pub mod warp;
 
-pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec3A, Vec4};
+pub use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec3A, Vec4};
 
 /// Linear RGB radiometric quantity (sRGB / Rec. 709 primaries).
 pub type Rgb = Vec3;

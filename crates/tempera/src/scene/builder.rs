@@ -5,14 +5,22 @@ use super::{NO_LIGHT, Scene};
 use crate::accel::Bvh;
 use crate::camera::{Camera, CameraDesc};
 use crate::film::FilmDesc;
-use crate::geometry::{Geometry, Shape};
+use crate::geometry::{Geometry, Instance, Prototype, Shape};
 use crate::light::{AreaLight, Light, LightSampler};
 use crate::material::Material;
+use crate::math::Mat4;
 use crate::texture::Texture;
 
 /// Handle of a material added to a builder.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MaterialId(pub u32);
+
+/// Handle of a prototype (instanced geometry) added to a builder.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrototypeId(pub u32);
+
+/// A shape of a prototype: geometry, material and optional alpha texture.
+pub type PrototypeShape = (Shape, MaterialId, Option<Texture>);
 
 /// Emission of an area light attached to a shape.
 #[derive(Clone, Debug)]
@@ -49,6 +57,8 @@ pub enum SceneError {
     EmptyFilm(u32, u32),
     #[error("invalid shape {shape}: {reason}")]
     InvalidShape { shape: usize, reason: String },
+    #[error("invalid instance: {0}")]
+    InvalidInstance(String),
 }
 
 #[derive(Debug, Default)]
@@ -59,6 +69,8 @@ pub struct SceneBuilder {
     materials: Vec<Material>,
     displacement: Vec<Option<Texture>>,
     shape_alpha: Vec<Option<Texture>>,
+    prototypes: Vec<Vec<PrototypeShape>>,
+    instances: Vec<(u32, Mat4)>,
     lights: Vec<Light>,
     camera: Option<CameraDesc>,
     film: FilmDesc,
@@ -103,6 +115,17 @@ impl SceneBuilder {
         self.shape_alpha.push(alpha);
     }
 
+    /// Adds geometry to be placed by instances; it is stored once however often it is placed.
+    pub fn add_prototype(&mut self, shapes: Vec<PrototypeShape>) -> PrototypeId {
+        self.prototypes.push(shapes);
+        PrototypeId(self.prototypes.len() as u32 - 1)
+    }
+
+    /// Places a prototype with the transformation `to_world`.
+    pub fn add_instance(&mut self, prototype: PrototypeId, to_world: Mat4) {
+        self.instances.push((prototype.0, to_world));
+    }
+
     /// Adds a non-area light (point, spot, distant, infinite).
     pub fn add_light(&mut self, light: Light) {
         self.lights.push(light);
@@ -127,6 +150,19 @@ impl SceneBuilder {
         for (shape, &material) in self.shape_material.iter().enumerate() {
             if material as usize >= self.materials.len() {
                 return Err(SceneError::UnknownMaterial { shape, material, count: self.materials.len() });
+            }
+        }
+        for (shape, (_, material, _)) in self.prototypes.iter().flatten().enumerate() {
+            if material.0 as usize >= self.materials.len() {
+                return Err(SceneError::UnknownMaterial { shape, material: material.0, count: self.materials.len() });
+            }
+        }
+        for &(p, m) in &self.instances {
+            if p as usize >= self.prototypes.len() {
+                return Err(SceneError::InvalidInstance(format!("prototype {p} does not exist")));
+            }
+            if !m.is_finite() || m.determinant().abs() < 1e-20 {
+                return Err(SceneError::InvalidInstance("the transformation is not invertible".into()));
             }
         }
         for m in &self.materials {
@@ -162,13 +198,23 @@ impl SceneBuilder {
                 geometry.set_alpha(shape, alpha);
             }
         }
+        let prototypes = self.prototypes.into_iter().map(build_prototype).collect();
+        let instances = self
+            .instances
+            .iter()
+            .map(|&(p, m)| {
+                Instance::new(p, m)
+                    .ok_or_else(|| SceneError::InvalidInstance("the transformation is not invertible".into()))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        geometry.add_instances(prototypes, instances);
         let accel = Bvh::build(&mut geometry);
         let bounds = geometry.world_bounds();
 
         let mut lights = self.lights;
         let mut prim_light = vec![NO_LIGHT; geometry.prims.len()];
         for (prim, r) in geometry.prims.iter().enumerate() {
-            if let Some(e) = &self.shape_emission[r.shape as usize] {
+            if let Some(Some(e)) = self.shape_emission.get(r.shape as usize) {
                 prim_light[prim] = lights.len() as u32;
                 lights.push(Light::Area(AreaLight {
                     prim: prim as u32,
@@ -199,4 +245,22 @@ impl SceneBuilder {
             bounds,
         })
     }
+}
+
+fn build_prototype(shapes: Vec<PrototypeShape>) -> Prototype {
+    let mut materials = Vec::with_capacity(shapes.len());
+    let mut alphas = Vec::with_capacity(shapes.len());
+    let mut geometry_shapes = Vec::with_capacity(shapes.len());
+    for (shape, material, alpha) in shapes {
+        geometry_shapes.push(shape);
+        materials.push(material.0);
+        alphas.push(alpha);
+    }
+    let mut geometry = Geometry::new(geometry_shapes);
+    for (shape, alpha) in alphas.into_iter().enumerate() {
+        if let Some(alpha) = alpha {
+            geometry.set_alpha(shape, alpha);
+        }
+    }
+    Prototype::new(geometry, materials)
 }

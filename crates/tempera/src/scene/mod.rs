@@ -5,7 +5,7 @@ mod builder;
 #[cfg(test)]
 mod tests;
 
-pub use builder::{AreaEmission, MaterialId, RenderDefaults, SceneBuilder, SceneError};
+pub use builder::{AreaEmission, MaterialId, PrototypeId, PrototypeShape, RenderDefaults, SceneBuilder, SceneError};
 
 use crate::accel::{Accel, Bvh};
 use crate::bsdf::SurfaceBsdf;
@@ -81,14 +81,11 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
         let hit = self.accel.intersect(&self.geometry, ray, f32::INFINITY)?;
         let surface = self.geometry.surface(ray, &hit);
-        let shape = self.geometry.prims[hit.prim as usize].shape;
-        Some(Interaction {
-            surface,
-            t: hit.t,
-            wo: -ray.d,
-            prim: hit.prim,
-            material: self.shape_material[shape as usize],
-        })
+        let material = match self.geometry.instance(hit.prim) {
+            Some((_, proto)) => proto.shape_material[proto.geometry.prims[hit.inner as usize].shape as usize],
+            None => self.shape_material[self.geometry.prims[hit.prim as usize].shape as usize],
+        };
+        Some(Interaction { surface, t: hit.t, wo: -ray.d, prim: hit.prim, material })
     }
 
     /// True when something blocks `ray` before `t_max`.

@@ -3,8 +3,8 @@
 use super::*;
 use crate::camera::CameraDesc;
 use crate::material::{Material, MixMaterial};
-use crate::math::Vec2;
 use crate::math::rng::Pcg32;
+use crate::math::{Mat4, Quat, Vec2};
 use crate::scenes::quad;
 use crate::texture::{Image, ImageTexture};
 use std::sync::Arc;
@@ -96,4 +96,91 @@ fn bump_mapping_tilts_the_shading_normal_by_the_displacement_slope() {
     // ∂p/∂u = (2, 0, 0) + k·z, ∂p/∂v = (0, 1, 0): n' ∝ (-k, 0, 2).
     let want = Vec3::new(-k, 0.0, 2.0).normalize();
     assert!((n - want).length() < 1e-3, "{n} vs {want}");
+}
+
+#[test]
+fn instances_intersect_like_flattened_copies() {
+    use crate::geometry::{Shape, Sphere};
+    let transforms = [
+        Mat4::from_translation(Vec3::new(3.0, 0.0, 0.0)),
+        Mat4::from_rotation_translation(
+            Quat::from_axis_angle(Vec3::new(1.0, 2.0, 0.5).normalize(), 0.8),
+            Vec3::new(0.0, 2.0, -1.0),
+        ),
+        Mat4::from_scale_rotation_translation(
+            Vec3::new(1.0, 0.5, 2.0),
+            Quat::from_axis_angle(Vec3::Z, 0.3),
+            Vec3::new(-2.0, -1.0, 0.5),
+        ),
+        Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)) * Mat4::from_translation(Vec3::new(1.0, -2.0, 0.0)),
+    ];
+    let parts = |b: &mut SceneBuilder| {
+        let red = b.add_material(Material::diffuse(Rgb::new(1.0, 0.0, 0.0)));
+        let blue = b.add_material(Material::diffuse(Rgb::new(0.0, 0.0, 1.0)));
+        (
+            vec![
+                (
+                    Shape::Sphere(Sphere { center: Vec3::new(0.0, 0.0, 0.5), radius: 0.5, reverse_orientation: false }),
+                    red,
+                ),
+                (unit_quad(), blue),
+            ],
+            red,
+            blue,
+        )
+    };
+    let mut inst = builder();
+    let (shapes, ..) = parts(&mut inst);
+    let proto = inst.add_prototype(shapes.into_iter().map(|(s, m)| (s, m, None)).collect());
+    for m in transforms {
+        inst.add_instance(proto, m);
+    }
+    let mut flat = builder();
+    let (shapes, ..) = parts(&mut flat);
+    for m in transforms {
+        for (shape, material) in &shapes {
+            let mut mesh = match shape {
+                Shape::Mesh(mesh) => mesh.clone(),
+                Shape::Sphere(s) => {
+                    // Compare against the analytic sphere only under similarity transforms.
+                    if m.determinant() < 0.0 || (m.x_axis.length() - m.y_axis.length()).abs() > 1e-5 {
+                        continue;
+                    }
+                    let c = m.transform_point3(s.center);
+                    flat.add_shape(
+                        Shape::Sphere(Sphere { center: c, radius: s.radius * m.x_axis.length(), ..*s }),
+                        *material,
+                        None,
+                    );
+                    continue;
+                }
+                Shape::Disk(_) => unreachable!(),
+            };
+            mesh.transform(&m);
+            flat.add_shape(Shape::Mesh(mesh), *material, None);
+        }
+    }
+    let (inst, flat) = (inst.build().unwrap(), flat.build().unwrap());
+    assert_eq!(inst.geometry.prototypes.len(), 1, "geometry is stored once");
+    let mut rng = Pcg32::new(8, 8);
+    let mut compared = 0;
+    for _ in 0..20_000 {
+        let o = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 12.0 - Vec3::splat(6.0);
+        let target = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 6.0 - Vec3::splat(3.0);
+        let ray = Ray::new(o, (target - o).normalize());
+        let (a, b) = (inst.intersect(&ray), flat.intersect(&ray));
+        let Some(b) = b else { continue };
+        // Spheres under non-similarity transforms are only in the instanced scene.
+        let Some(a) = a else { panic!("instanced scene missed a hit at t = {}", b.t) };
+        if (a.t - b.t).abs() > 1e-4 * b.t.max(1.0) {
+            assert!(a.t < b.t, "instanced hit farther than flattened: {} vs {}", a.t, b.t);
+            continue;
+        }
+        compared += 1;
+        assert!((a.surface.p - b.surface.p).length() < 1e-3);
+        assert!((a.surface.ng - b.surface.ng).length() < 1e-3, "{} vs {}", a.surface.ng, b.surface.ng);
+        assert_eq!(a.material, b.material);
+        assert!(inst.occluded(&ray, b.t * 1.001));
+    }
+    assert!(compared > 1000, "only {compared} hits compared");
 }
