@@ -217,3 +217,14 @@ fn mix_diffusetransmission_bump_and_alpha_load_without_approximation() {
     assert!(scene.materials.iter().any(|m| matches!(m, Material::DiffuseTransmission(d)
         if d.transmittance.as_constant() == Some(Vec3::new(0.5, 0.4, 0.3)))));
 }
+
+#[test]
+fn spectrum_files_are_read_relative_to_the_scene() {
+    let text = "Camera \"perspective\"\nWorldBegin\nMaterial \"diffuse\" \"spectrum reflectance\" \"flat.spd\"\nShape \"sphere\"";
+    let scene = load_text(text).unwrap().builder.build().unwrap();
+    let Some(tempera::material::Material::Diffuse(d)) = scene.materials.last() else { panic!("diffuse expected") };
+    let c = d.reflectance.as_constant().unwrap();
+    assert!((c - Vec3::splat(0.25)).abs().max_element() < 1e-3, "{c}");
+    let err = error("Material \"diffuse\" \"spectrum reflectance\" \"nothing.spd\"");
+    assert!(err.contains("neither a named spectrum nor a readable spectrum file"), "{err}");
+}

@@ -456,6 +456,9 @@ impl Loader {
         }
         let Some(id) = self.material_id(material) else { return };
         self.info.shapes += 1;
+        if emission.is_some() {
+            *self.info.lights.entry("area (diffuse)".to_owned()).or_default() += 1;
+        }
         if let tempera::geometry::Shape::Mesh(m) = &shape {
             self.info.triangles += m.indices.len();
         }

@@ -53,12 +53,14 @@ impl Loader {
             ("spectrum", Values::Str(v)) => match spectrum::named(&v[0]) {
                 Some(c) => c,
                 None => {
-                    return Err(syntax(
-                        &at,
-                        format!("unknown named spectrum \"{}\" (spectrum files are not supported)", v[0]),
-                    ));
+                    let pairs = self.spectrum_file(&v[0], &at)?;
+                    match usage {
+                        SpectrumUse::Emission => spectrum::sampled_emission(&pairs),
+                        SpectrumUse::Unitless => spectrum::sampled_reflectance(&pairs),
+                    }
                 }
             },
+
             ("float", Values::Num(v)) if !v.is_empty() => Rgb::splat(v[0] as f32),
             (ty, _) => return Err(syntax(&at, format!("parameter \"{name}\" cannot be given as \"{ty}\""))),
         };
@@ -66,6 +68,28 @@ impl Loader {
             return Err(syntax(&at, format!("parameter \"{name}\" is not finite")));
         }
         Ok(Some(Texture::Constant(rgb)))
+    }
+
+    /// Wavelength–value pairs from a spectrum file (whitespace-separated numbers, `#` comments).
+    fn spectrum_file(&self, name: &str, at: &Loc) -> Result<Vec<f64>, LoadError> {
+        let path = self.resolve(at, name);
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            syntax(at, format!("\"{name}\" is neither a named spectrum nor a readable spectrum file: {e}"))
+        })?;
+        let mut values = Vec::new();
+        for (i, line) in text.lines().enumerate() {
+            let line = line.split('#').next().unwrap_or("");
+            for word in line.split_whitespace() {
+                let v: f64 = word.parse().map_err(|_| {
+                    syntax(at, format!("{}:{}: expected a number, found '{word}'", path.display(), i + 1))
+                })?;
+                values.push(v);
+            }
+        }
+        if values.len() < 2 || values.len() % 2 != 0 || values.iter().any(|v| !v.is_finite()) {
+            return Err(syntax(at, format!("{}: expected wavelength–value pairs", path.display())));
+        }
+        Ok(values)
     }
 
     /// A float-valued parameter as a texture.
