@@ -310,6 +310,7 @@ impl Loader {
         self.builder.set_camera(CameraDesc {
             camera_to_world,
             fov_degrees: fov as f32,
+            fov_axis: tempera::camera::FovAxis::Shorter,
             lens_radius: params.float("lensradius", 0.0)? as f32,
             focal_distance: params.float("focaldistance", 1e6)? as f32,
             screen_window,

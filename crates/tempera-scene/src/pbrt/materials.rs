@@ -75,7 +75,7 @@ impl Loader {
                 ConductorFresnel::Ior { eta: eta.expect("default given"), k: k.expect("default given") }
             }
         };
-        Ok(ConductorMaterial { fresnel, roughness: self.roughness(params, prefix)? })
+        Ok(ConductorMaterial { fresnel, roughness: self.roughness(params, prefix)?, tint: 1.0.into() })
     }
 
     fn approximated(&mut self, ty: &str, at: &Loc, how: &str) -> Result<(), LoadError> {

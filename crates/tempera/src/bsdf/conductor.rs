@@ -9,12 +9,14 @@ pub struct Conductor {
     pub distribution: Ggx,
     pub eta: Rgb,
     pub k: Rgb,
+    /// Multiplier of the reflectance (Mitsuba's `specularReflectance`; 1 for physical metals).
+    pub tint: Rgb,
 }
 
 impl Conductor {
     #[inline]
     fn fresnel(&self, cos: f32) -> Rgb {
-        fresnel::conductor_rgb(cos.abs(), self.eta, self.k)
+        fresnel::conductor_rgb(cos.abs(), self.eta, self.k) * self.tint
     }
 
     fn microfacet(&self, wo: Vec3, wi: Vec3) -> Rgb {

@@ -4,7 +4,7 @@
 
 pub mod perspective;
 
-pub use perspective::{CameraDesc, PerspectiveCamera};
+pub use perspective::{CameraDesc, FovAxis, PerspectiveCamera};
 
 use crate::geometry::Ray;
 use crate::math::{Rgb, Vec2, Vec3};

@@ -8,12 +8,25 @@ use crate::math::warp::concentric_disk;
 use crate::math::{Mat4, Rgb, Vec2, Vec3};
 use std::f32::consts::PI;
 
+/// The image axis the field of view spans.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FovAxis {
+    /// pbrt's convention.
+    #[default]
+    Shorter,
+    X,
+    Y,
+    Larger,
+    Diagonal,
+}
+
 /// Resolution-independent camera parameters, as a scene file gives them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraDesc {
     pub camera_to_world: Mat4,
-    /// Full field of view in degrees along the shorter image axis.
+    /// Full field of view in degrees along `fov_axis`.
     pub fov_degrees: f32,
+    pub fov_axis: FovAxis,
     pub lens_radius: f32,
     pub focal_distance: f32,
     /// Explicit screen window `[x_min, x_max, y_min, y_max]` on the `z = 1` plane before the
@@ -28,7 +41,14 @@ impl CameraDesc {
         let right = up.normalize().cross(dir).normalize();
         let new_up = dir.cross(right);
         let camera_to_world = Mat4::from_cols(right.extend(0.0), new_up.extend(0.0), dir.extend(0.0), eye.extend(1.0));
-        Self { camera_to_world, fov_degrees, lens_radius: 0.0, focal_distance: 1.0, screen_window: None }
+        Self {
+            camera_to_world,
+            fov_degrees,
+            fov_axis: FovAxis::Shorter,
+            lens_radius: 0.0,
+            focal_distance: 1.0,
+            screen_window: None,
+        }
     }
 
     pub fn build(&self, width: u32, height: u32) -> PerspectiveCamera {
@@ -57,7 +77,16 @@ impl PerspectiveCamera {
         } else {
             [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect]
         });
-        let tan = (desc.fov_degrees.to_radians() * 0.5).tan();
+        // The base window has half-extent 1 along the shorter axis; the fov spans `fov_axis`.
+        let (hx, hy) = (0.5 * (base[1] - base[0]), 0.5 * (base[3] - base[2]));
+        let extent = match (desc.fov_axis, desc.screen_window) {
+            (_, Some(_)) | (FovAxis::Shorter, None) => 1.0,
+            (FovAxis::X, None) => hx,
+            (FovAxis::Y, None) => hy,
+            (FovAxis::Larger, None) => hx.max(hy),
+            (FovAxis::Diagonal, None) => hx.hypot(hy),
+        };
+        let tan = (desc.fov_degrees.to_radians() * 0.5).tan() / extent;
         let window = base.map(|v| v * tan);
         let image_area = (window[1] - window[0]) * (window[3] - window[2]);
         Self {
@@ -178,6 +207,27 @@ mod tests {
             let angle = short_axis_edge.d.dot(Vec3::Z).acos().to_degrees();
             assert!((angle - 45.0).abs() < 1e-3, "half fov on the short axis: {angle}");
         }
+    }
+
+    #[test]
+    fn fov_axis_selects_the_spanned_axis() {
+        let mut desc = CameraDesc::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 90.0);
+        let edge_angle = |cam: &PerspectiveCamera, raster: Vec2| {
+            cam.generate_ray(raster, Vec2::ZERO).d.dot(Vec3::Z).acos().to_degrees()
+        };
+        for (axis, raster) in [(FovAxis::X, Vec2::new(0.0, 50.0)), (FovAxis::Y, Vec2::new(100.0, 0.0))] {
+            desc.fov_axis = axis;
+            for (w, h) in [(200, 100), (100, 200)] {
+                let cam = desc.build(w, h);
+                let r =
+                    if axis == FovAxis::X { Vec2::new(0.0, h as f32 / 2.0) } else { Vec2::new(w as f32 / 2.0, 0.0) };
+                let _ = raster;
+                assert!((edge_angle(&cam, r) - 45.0).abs() < 1e-3, "{axis:?} {w}x{h}");
+            }
+        }
+        desc.fov_axis = FovAxis::Diagonal;
+        let cam = desc.build(300, 400);
+        assert!((edge_angle(&cam, Vec2::ZERO) - 45.0).abs() < 1e-3);
     }
 
     #[test]

@@ -54,6 +54,8 @@ pub struct DiffuseMaterial {
 pub struct ConductorMaterial {
     pub fresnel: ConductorFresnel,
     pub roughness: Roughness,
+    /// Reflectance multiplier (Mitsuba's `specularReflectance`).
+    pub tint: Texture,
 }
 
 #[derive(Clone, Debug)]
@@ -143,7 +145,12 @@ impl Material {
                     ConductorFresnel::Ior { eta, k } => (eta.eval(uv), k.eval(uv)),
                     ConductorFresnel::Reflectance(r) => fresnel::conductor_from_reflectance(r.eval(uv)),
                 };
-                Bsdf::Conductor(Conductor { distribution: m.roughness.distribution(uv), eta, k })
+                Bsdf::Conductor(Conductor {
+                    distribution: m.roughness.distribution(uv),
+                    eta,
+                    k,
+                    tint: m.tint.eval(uv).max(Rgb::ZERO),
+                })
             }
             Material::Dielectric(m) => {
                 Bsdf::Dielectric(Dielectric { distribution: m.roughness.distribution(uv), eta: m.eta })

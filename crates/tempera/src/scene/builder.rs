@@ -68,6 +68,7 @@ pub struct SceneBuilder {
     shape_emission: Vec<Option<AreaEmission>>,
     materials: Vec<Material>,
     displacement: Vec<Option<Texture>>,
+    one_sided: Vec<bool>,
     shape_alpha: Vec<Option<Texture>>,
     prototypes: Vec<Vec<PrototypeShape>>,
     instances: Vec<(u32, Mat4)>,
@@ -85,6 +86,7 @@ impl SceneBuilder {
     pub fn add_material(&mut self, material: Material) -> MaterialId {
         self.materials.push(material);
         self.displacement.push(None);
+        self.one_sided.push(false);
         MaterialId(self.materials.len() as u32 - 1)
     }
 
@@ -92,6 +94,14 @@ impl SceneBuilder {
     pub fn set_displacement(&mut self, material: MaterialId, displacement: Texture) {
         if let Some(d) = self.displacement.get_mut(material.0 as usize) {
             *d = Some(displacement);
+        }
+    }
+
+    /// Makes a material black when seen from behind the geometric normal (Mitsuba BSDFs that
+    /// are not wrapped in `twosided`).
+    pub fn set_one_sided(&mut self, material: MaterialId) {
+        if let Some(flag) = self.one_sided.get_mut(material.0 as usize) {
+            *flag = true;
         }
     }
 
@@ -233,6 +243,7 @@ impl SceneBuilder {
             accel,
             materials: self.materials,
             displacement: self.displacement,
+            one_sided: self.one_sided,
             shape_material: self.shape_material,
             prim_light,
             light_sampler: LightSampler::new(&powers),

@@ -62,6 +62,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Bump-map displacement per material.
     displacement: Vec<Option<Texture>>,
+    /// Materials that are black seen from behind their geometric normal (Mitsuba's default).
+    one_sided: Vec<bool>,
     shape_material: Vec<u32>,
     prim_light: Vec<u32>,
     pub lights: Vec<Light>,
@@ -130,7 +132,12 @@ impl Scene {
             Some(d) => bump(d, s),
             None => Frame::from_normal_tangent(s.ns, s.dpdu),
         };
-        SurfaceBsdf { bsdf: self.materials[material].bsdf(s.uv), frame, ng: s.ng }
+        let bsdf = if self.one_sided[material] && it.wo.dot(s.ng) < 0.0 {
+            crate::bsdf::Bsdf::Diffuse(crate::bsdf::Diffuse { reflectance: Rgb::ZERO })
+        } else {
+            self.materials[material].bsdf(s.uv)
+        };
+        SurfaceBsdf { bsdf, frame, ng: s.ng }
     }
 
     /// Radius of the bounding sphere of the geometry.

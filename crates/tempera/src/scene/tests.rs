@@ -184,3 +184,18 @@ fn instances_intersect_like_flattened_copies() {
     }
     assert!(compared > 1000, "only {compared} hits compared");
 }
+
+#[test]
+fn one_sided_materials_are_black_from_behind() {
+    let mut b = builder();
+    let m = b.add_material(Material::diffuse(Rgb::ONE));
+    b.set_one_sided(m);
+    b.add_shape(unit_quad(), m, None);
+    let scene = b.build().unwrap();
+    let eval = |o: Vec3, d: Vec3| {
+        let it = scene.intersect(&Ray::new(o, d)).unwrap();
+        scene.bsdf(&it).eval(it.wo, it.wo, crate::bsdf::TransportMode::Radiance)
+    };
+    assert!(eval(Vec3::new(1.0, 0.5, 1.0), -Vec3::Z).x > 0.0, "front side reflects");
+    assert_eq!(eval(Vec3::new(1.0, 0.5, -1.0), Vec3::Z), Rgb::ZERO, "back side is black");
+}

@@ -21,6 +21,7 @@ fn conductor((eta, k): (Rgb, Rgb), alpha: f32) -> Material {
     Material::Conductor(ConductorMaterial {
         fresnel: ConductorFresnel::Ior { eta: eta.into(), k: k.into() },
         roughness: Roughness::alpha(alpha),
+        tint: 1.0.into(),
     })
 }
 
