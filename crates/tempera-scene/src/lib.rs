@@ -1,10 +1,13 @@
 //! Scene loading for Tempera. Loaders translate scene files into the core's
 //! [`tempera::scene::SceneBuilder`]; the core itself knows no file format. The format is chosen
-//! by extension: `.pbrt` (pbrt-v4) and `.xml` (Mitsuba 0.5/0.6).
+//! by extension: `.pbrt` (pbrt-v4) and `.xml` (Mitsuba 0.5/0.6 XML).
 
 pub mod diagnostics;
+mod mitsuba;
 mod pbrt;
 pub mod ply;
+pub mod serialized;
+mod spectrum;
 
 pub use diagnostics::{Loc, Warning};
 
@@ -80,12 +83,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError
     std::fs::metadata(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
     match SceneFormat::from_path(path).ok_or_else(|| LoadError::UnknownFormat { path: path.to_owned() })? {
         SceneFormat::Pbrt => pbrt::load(path, options),
-        SceneFormat::Mitsuba => Err(LoadError::Unsupported {
-            message: format!(
-                "{}: Mitsuba XML scene files are not supported by this version of Tempera",
-                path.display()
-            ),
-        }),
+        SceneFormat::Mitsuba => mitsuba::load(path, options),
     }
 }
 

@@ -63,13 +63,13 @@ impl Loader {
                 let eta = self.spectrum_param(
                     params,
                     &key("eta"),
-                    super::spectrum::named("metal-Cu-eta"),
+                    crate::spectrum::named("metal-Cu-eta"),
                     SpectrumUse::Unitless,
                 )?;
                 let k = self.spectrum_param(
                     params,
                     &key("k"),
-                    super::spectrum::named("metal-Cu-k"),
+                    crate::spectrum::named("metal-Cu-k"),
                     SpectrumUse::Unitless,
                 )?;
                 ConductorFresnel::Ior { eta: eta.expect("default given"), k: k.expect("default given") }

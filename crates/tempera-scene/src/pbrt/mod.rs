@@ -9,7 +9,7 @@ mod lights;
 mod materials;
 mod params;
 mod shapes;
-mod spectrum;
+
 mod state;
 mod textures;
 

@@ -1,4 +1,4 @@
-//! Spectra in pbrt-v4 files reduced to linear sRGB: RGB values pass through; blackbody
+//! Spectra in scene files reduced to linear sRGB: RGB values pass through; blackbody
 //! temperatures and sampled spectra are integrated against the CIE 1931 colour-matching
 //! functions (the analytic multi-lobe fit of Wyman, Sloan & Shirley 2013, JCGT 2(2)) and
 //! converted with the XYZ→sRGB matrix of IEC 61966-2-1. Emission spectra are normalised to unit
