@@ -78,6 +78,11 @@ pub fn load_pbrt_str(text: &str, path: &Path, options: &LoadOptions) -> Result<L
     pbrt::load_str(text, path, options)
 }
 
+/// Loads Mitsuba XML scene text as if read from `path`.
+pub fn load_mitsuba_str(text: &str, path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
+    mitsuba::load_str(text, path, options)
+}
+
 /// Loads the scene at `path`.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
     std::fs::metadata(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;

@@ -27,23 +27,29 @@ fn render(scene: &Scene, max_depth: u32, spp: u32) -> Image {
 }
 
 #[test]
-fn every_pbrt_scene_loads_and_renders() {
+fn every_real_scene_file_loads_and_renders() {
     let Some(dir) = shared_scenes() else { return };
-    let mut count = 0;
+    let (mut pbrt, mut mitsuba) = (0, 0);
     for entry in std::fs::read_dir(&dir).unwrap() {
-        let file = entry.unwrap().path().join("pbrt-v4/scene-v4.pbrt");
-        if !file.is_file() {
-            continue;
+        let scene_dir = entry.unwrap().path();
+        for (file, counter) in [("pbrt-v4/scene-v4.pbrt", &mut pbrt), ("mitsuba/scene_v0.6.xml", &mut mitsuba)] {
+            let file = scene_dir.join(file);
+            if !file.is_file() {
+                continue;
+            }
+            let loaded = load(&file, &LoadOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+            let mut scene = loaded.builder.build().unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+            scene.set_resolution(24, 16);
+            let img = render(&scene, 5, 4);
+            assert!(img.pixels.iter().all(|p| p.is_finite()), "{}", file.display());
+            // water-caustic's Mitsuba file gives its outward-facing walls one-sided BSDFs, which
+            // Mitsuba 0.6 renders black from inside; its floor is lit only through the water.
+            let known_dark = file.ends_with("water-caustic/mitsuba/scene_v0.6.xml");
+            assert!(known_dark || img.pixels.iter().any(|p| p.max_element() > 0.0), "{} renders black", file.display());
+            *counter += 1;
         }
-        let loaded = load(&file, &LoadOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
-        let mut scene = loaded.builder.build().unwrap_or_else(|e| panic!("{}: {e}", file.display()));
-        scene.set_resolution(24, 16);
-        let img = render(&scene, 5, 1);
-        assert!(img.pixels.iter().all(|p| p.is_finite()), "{}", file.display());
-        assert!(img.pixels.iter().any(|p| p.max_element() > 0.0), "{} renders black", file.display());
-        count += 1;
     }
-    assert!(count >= 5, "expected the five pbrt-v4 scenes, found {count}");
+    assert!(pbrt >= 5 && mitsuba >= 4, "expected five pbrt-v4 and four Mitsuba 0.6 scenes, found {pbrt} and {mitsuba}");
 }
 
 /// Averages `factor`×`factor` blocks.

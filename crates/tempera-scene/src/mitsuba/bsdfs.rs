@@ -319,7 +319,7 @@ impl Loader {
                 self.inner_bsdf(ctx, props, ty)?
             }
             "null" => BsdfDesc { material: None, one_sided: false, displacement: None, opacity: None, id: None },
-            other => {
+            other @ ("phong" | "ward" | "irawan" | "hk" | "dipole" | "difftrans" | "sssbrdf" | "mixturebsdf") => {
                 for n in props.unused() {
                     if let Some(name) = n.attribute("name") {
                         props.named_value_present(name);
@@ -332,6 +332,7 @@ impl Loader {
                 )?;
                 BsdfDesc::new(Material::diffuse(Rgb::splat(0.5)), true)
             }
+            other => return Err(ctx.err(&props.loc, format!("unknown bsdf plugin \"{other}\""))),
         })
     }
 
@@ -431,6 +432,7 @@ impl Loader {
                 }
                 Texture::Constant(Rgb::splat(0.5))
             }
+            other => return Err(ctx.err(&props.loc, format!("unknown texture plugin \"{other}\""))),
         };
         self.report_unused(ctx, &props, &format!("texture \"{ty}\""))?;
         Ok(tex)

@@ -380,7 +380,20 @@ impl Props<'_, '_> {
 
 /// Loads a Mitsuba XML scene file.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
-    let mut loader = Loader {
+    let mut loader = new_loader(options);
+    loader.load_file(path, None, HashMap::new())?;
+    Ok(finish(loader))
+}
+
+/// Loads Mitsuba XML text as if read from `path`.
+pub fn load_str(text: &str, path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
+    let mut loader = new_loader(options);
+    loader.load_text(text, path, HashMap::new())?;
+    Ok(finish(loader))
+}
+
+fn new_loader(options: &LoadOptions) -> Loader {
+    Loader {
         builder: SceneBuilder::new(),
         warnings: Vec::new(),
         warned_once: HashSet::new(),
@@ -393,10 +406,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError
         film: FilmDesc { width: 768, height: 576, filter: Filter::Gaussian { radius: 2.0, sigma: 0.5 } },
         defaults: RenderDefaults::default(),
         depth: 0,
-    };
-    loader.load_file(path, None, HashMap::new())?;
+    }
+}
+
+fn finish(loader: Loader) -> LoadedScene {
     let mut builder = loader.builder;
     builder.set_film(loader.film);
     builder.set_defaults(loader.defaults);
-    Ok(LoadedScene { builder, warnings: loader.warnings, info: loader.info })
+    LoadedScene { builder, warnings: loader.warnings, info: loader.info }
 }

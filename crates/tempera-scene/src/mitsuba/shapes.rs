@@ -96,12 +96,8 @@ impl Loader {
         let path = ctx.resolve(file);
         let f = std::fs::File::open(&path)
             .map_err(|e| ctx.err(&props.loc, format!("cannot read {}: {e}", path.display())))?;
-        let options = tobj::LoadOptions {
-            single_index: true,
-            triangulate: true,
-            ignore_points: true,
-            ignore_lines: true,
-        };
+        let options =
+            tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
         let (models, _) =
             tobj::load_obj_buf(&mut BufReader::new(f), &options, |_| Err(tobj::LoadError::OpenFileFailed))
                 .map_err(|e| ctx.err(&props.loc, format!("{}: {e}", path.display())))?;
@@ -216,7 +212,7 @@ impl Loader {
                     (p0 + axis * v + n * r, n)
                 })
             }
-            _ => {
+            "hair" | "heightfield" => {
                 for n in props.unused() {
                     if let Some(name) = n.attribute("name") {
                         props.named_value_present(name);
@@ -225,6 +221,7 @@ impl Loader {
                 self.warn(Some(&props.loc), format!("shape \"{ty}\" is not supported and is skipped"))?;
                 return Ok(None);
             }
+            other => return Err(ctx.err(&props.loc, format!("unknown shape plugin \"{other}\""))),
         };
         if flip {
             m.reverse_orientation = true;
