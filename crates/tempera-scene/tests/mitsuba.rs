@@ -171,3 +171,11 @@ fn truncated_and_mutated_input_never_panics() {
         }
     }
 }
+
+#[test]
+fn unknown_plugins_are_errors_and_unsupported_ones_warnings() {
+    assert!(error(&wrap("<texture type=\"noise\" id=\"t\"/>")).contains("unknown texture plugin \"noise\""));
+    assert!(error(&wrap("<bsdf type=\"velvet\" id=\"b\"/>")).contains("unknown bsdf plugin \"velvet\""));
+    let loaded = load_text(&wrap("<texture type=\"wireframe\" id=\"t\"/><bsdf type=\"ward\" id=\"b\"/>")).unwrap();
+    assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
+}

@@ -420,7 +420,7 @@ impl Loader {
                 let s = props.float(ctx, "scale", 1.0)? as f32;
                 Texture::Scale(Box::new((inner, s.into())))
             }
-            other => {
+            other @ ("gridtexture" | "curvature" | "vertexcolors" | "wireframe") => {
                 self.warn(
                     Some(&props.loc),
                     format!("texture \"{other}\" is not supported; a constant 0.5 stands in for it"),
