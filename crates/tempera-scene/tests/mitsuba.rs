@@ -179,3 +179,27 @@ fn unknown_plugins_are_errors_and_unsupported_ones_warnings() {
     let loaded = load_text(&wrap("<texture type=\"wireframe\" id=\"t\"/><bsdf type=\"ward\" id=\"b\"/>")).unwrap();
     assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
 }
+
+#[test]
+fn envmap_follows_mitsubas_latitude_longitude_orientation() {
+    // A 16×8 map, black but for one texel at u ≈ 0.281, v ≈ 0.3125.
+    let (w, h, tx, ty) = (16usize, 8usize, 4usize, 2usize);
+    let mut px = vec![tempera::math::Rgb::ZERO; w * h];
+    px[ty * w + tx] = tempera::math::Rgb::ONE;
+    let dir = std::env::temp_dir().join(format!("tempera-envmap-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    tempera_image::write_image(&dir.join("env.pfm"), &tempera::texture::Image::new(w, h, px), &Default::default())
+        .unwrap();
+    let text = wrap(
+        "<emitter type=\"envmap\"><string name=\"filename\" value=\"env.pfm\"/><float name=\"scale\" value=\"2\"/></emitter>",
+    );
+    let loaded = load_mitsuba_str(&text, &dir.join("scene.xml"), &LoadOptions::default()).unwrap();
+    let scene = loaded.builder.build().unwrap();
+    let light = &scene.lights[0];
+    let (u, v) = ((tx as f32 + 0.5) / w as f32, (ty as f32 + 0.5) / h as f32);
+    let (phi, theta) = (u * std::f32::consts::TAU, v * std::f32::consts::PI);
+    let d = Vec3::new(phi.sin() * theta.sin(), theta.cos(), -phi.cos() * theta.sin());
+    assert_eq!(light.le(d), tempera::math::Rgb::splat(2.0), "Mitsuba's direction for the texel");
+    assert_eq!(light.le(Vec3::new(-d.x, d.y, d.z)), tempera::math::Rgb::ZERO, "not mirrored");
+    assert_eq!(light.le(-d), tempera::math::Rgb::ZERO);
+}

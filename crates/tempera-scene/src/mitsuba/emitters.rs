@@ -82,8 +82,12 @@ impl Loader {
         if !(1.0..=30.0).contains(&turbidity) {
             return Err(ctx.err(&props.loc, format!("turbidity {turbidity} is outside [1, 30]")));
         }
+        // The sun in the emitter's frame: `sunDirection` is given in world space.
         let sun = match props.vec3(ctx, "sunDirection")? {
-            Some(d) => d.try_normalize().ok_or_else(|| ctx.err(&props.loc, "zero sunDirection"))?,
+            Some(d) => {
+                let local = to_world.inverse().transform_vector3(d);
+                local.try_normalize().ok_or_else(|| ctx.err(&props.loc, "zero sunDirection"))?
+            }
             None => {
                 for name in ["latitude", "longitude", "timezone", "year", "month", "day", "hour", "minute", "second"] {
                     props.named_value_present(name);

@@ -94,6 +94,59 @@ pub fn sky_image(turbidity: f32, sun: Vec3, width: usize, height: usize) -> Imag
     Image::new(width, height, pixels)
 }
 
+/// Date, time and place of an observer, as Mitsuba's `sunsky` takes them.
+#[derive(Clone, Copy, Debug)]
+pub struct SunTime {
+    pub latitude: f64,
+    pub longitude: f64,
+    /// Hours ahead of UTC.
+    pub timezone: f64,
+    pub year: i64,
+    pub month: i64,
+    pub day: i64,
+    pub hour: f64,
+    pub minute: f64,
+    pub second: f64,
+}
+
+/// Unit direction towards the sun (y up, azimuth 0 towards −z, 90° towards +x) by the PSA
+/// algorithm (Blanco-Muriel et al. 2001, "Computing the Solar Vector", Solar Energy 70(5)).
+pub fn sun_direction(t: &SunTime) -> Vec3 {
+    use std::f64::consts::TAU;
+    let hours = t.hour - t.timezone + (t.minute + t.second / 60.0) / 60.0;
+    let a1 = (t.month - 14) / 12;
+    let jd = (1461 * (t.year + 4800 + a1)) / 4 + (367 * (t.month - 2 - 12 * a1)) / 12
+        - (3 * ((t.year + 4900 + a1) / 100)) / 4
+        + t.day
+        - 32075;
+    let n = jd as f64 - 0.5 + hours / 24.0 - 2_451_545.0;
+    let omega = 2.1429 - 0.001_039_459_4 * n;
+    let mean_longitude = 4.895_063 + 0.017_202_791_698 * n;
+    let anomaly = 6.240_06 + 0.017_201_969_9 * n;
+    let ecl_longitude = mean_longitude + 0.033_416_07 * anomaly.sin() + 0.000_348_94 * (2.0 * anomaly).sin()
+        - 0.000_113_4
+        - 0.000_020_3 * omega.sin();
+    let obliquity = 0.409_092_8 - 6.214e-9 * n + 0.000_039_6 * omega.cos();
+    let mut ra = (obliquity.cos() * ecl_longitude.sin()).atan2(ecl_longitude.cos());
+    if ra < 0.0 {
+        ra += TAU;
+    }
+    let declination = (obliquity.sin() * ecl_longitude.sin()).asin();
+    let gmst = 6.697_424_324_2 + 0.065_709_828_3 * n + hours;
+    let lmst = (gmst * 15.0 + t.longitude).to_radians();
+    let lat = t.latitude.to_radians();
+    let hour_angle = lmst - ra;
+    let mut zenith =
+        (lat.cos() * hour_angle.cos() * declination.cos() + declination.sin() * lat.sin()).clamp(-1.0, 1.0).acos();
+    let mut azimuth = (-hour_angle.sin()).atan2(declination.tan() * lat.cos() - lat.sin() * hour_angle.cos());
+    if azimuth < 0.0 {
+        azimuth += TAU;
+    }
+    zenith += 6371.01 / 149_597_890.0 * zenith.sin();
+    let (st, ct) = zenith.sin_cos();
+    Vec3::new((azimuth.sin() * st) as f32, ct as f32, (-azimuth.cos() * st) as f32)
+}
+
 /// The colour of the sun, with unit luminance.
 pub fn sun_color() -> Rgb {
     blackbody(5778.0)
@@ -111,5 +164,41 @@ mod tests {
         assert!(tempera::math::luminance(near) > tempera::math::luminance(far));
         assert!(far.z > far.x, "the sky away from the sun is blue: {far}");
         assert_eq!(sky_radiance(3.0, sun, Vec3::new(0.0, -0.5, 1.0).normalize()), Rgb::ZERO);
+    }
+
+    #[test]
+    fn solar_position_is_plausible() {
+        // Equator, equinox noon (UTC): the sun is almost overhead.
+        let equinox = SunTime {
+            latitude: 0.0,
+            longitude: 0.0,
+            timezone: 0.0,
+            year: 2010,
+            month: 3,
+            day: 20,
+            hour: 12.0,
+            minute: 0.0,
+            second: 0.0,
+        };
+        assert!(sun_direction(&equinox).y > 0.995, "{}", sun_direction(&equinox));
+        // Mitsuba's default: Tokyo, 10 July 2010, 15:00 local time: a western afternoon sun
+        // about 40° above the horizon.
+        let tokyo = SunTime {
+            latitude: 35.6894,
+            longitude: 139.6917,
+            timezone: 9.0,
+            year: 2010,
+            month: 7,
+            day: 10,
+            hour: 15.0,
+            minute: 0.0,
+            second: 0.0,
+        };
+        let d = sun_direction(&tokyo);
+        let elevation = d.y.asin().to_degrees();
+        assert!((30.0..50.0).contains(&elevation), "elevation {elevation}");
+        assert!(d.x < 0.0, "the afternoon sun is in the west (-x): {d}");
+        // Midnight: below the horizon.
+        assert!(sun_direction(&SunTime { hour: 0.0, ..tokyo }).y < 0.0);
     }
 }
