@@ -89,14 +89,21 @@ impl Loader {
                 local.try_normalize().ok_or_else(|| ctx.err(&props.loc, "zero sunDirection"))?
             }
             None => {
-                for name in ["latitude", "longitude", "timezone", "year", "month", "day", "hour", "minute", "second"] {
-                    props.named_value_present(name);
+                let time = sky::SunTime {
+                    latitude: props.float(ctx, "latitude", 35.6894)?,
+                    longitude: props.float(ctx, "longitude", 139.6917)?,
+                    timezone: props.float(ctx, "timezone", 9.0)?,
+                    year: props.int(ctx, "year", 2010)?,
+                    month: props.int(ctx, "month", 7)?,
+                    day: props.int(ctx, "day", 10)?,
+                    hour: props.float(ctx, "hour", 15.0)?,
+                    minute: props.float(ctx, "minute", 0.0)?,
+                    second: props.float(ctx, "second", 0.0)?,
+                };
+                if !(1..=12).contains(&time.month) || !(1..=31).contains(&time.day) {
+                    return Err(ctx.err(&props.loc, "month or day out of range"));
                 }
-                self.warn(
-                    Some(&props.loc),
-                    "the sun position from date and location is not computed; give sunDirection",
-                )?;
-                Vec3::new(0.0, 1.0, 0.0)
+                sky::sun_direction(&time)
             }
         };
         let sky_scale = props.float(ctx, "skyScale", 1.0)? as f32;
