@@ -206,11 +206,17 @@ fn envmap_follows_mitsubas_latitude_longitude_orientation() {
 
 #[test]
 fn sunsky_places_the_sun_from_date_and_location() {
-    let text = wrap("<emitter type=\"sunsky\"><float name=\"hour\" value=\"12\"/><float name=\"latitude\" value=\"0\"/>\
+    let text = wrap(
+        "<emitter type=\"sunsky\"><float name=\"hour\" value=\"12\"/><float name=\"latitude\" value=\"0\"/>\
         <float name=\"longitude\" value=\"0\"/><float name=\"timezone\" value=\"0\"/><integer name=\"month\" value=\"3\"/>\
-        <integer name=\"day\" value=\"20\"/></emitter>");
+        <integer name=\"day\" value=\"20\"/></emitter>",
+    );
     let scene = load_text(&text).unwrap().builder.build().unwrap();
-    let sun = scene.lights.iter().find_map(|l| if let tempera::light::Light::Distant(d) = l { Some(d.clone()) } else { None }).unwrap();
+    let sun = scene
+        .lights
+        .iter()
+        .find_map(|l| if let tempera::light::Light::Distant(d) = l { Some(d.clone()) } else { None })
+        .unwrap();
     assert!(sun.to_light.y > 0.995, "equinox noon on the equator: the sun is overhead ({})", sun.to_light);
     assert!(scene.lights.iter().any(|l| l.is_infinite()), "and the sky is an environment light");
 }

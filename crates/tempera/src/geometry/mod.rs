@@ -232,6 +232,22 @@ impl Geometry {
         }
     }
 
+    /// Samples a point uniformly by area on primitive `i`; the density is per unit area.
+    pub fn sample_area(&self, i: u32, u: Vec2) -> Option<ShapeSample> {
+        let r = self.prims[i as usize];
+        if r.shape == INSTANCE {
+            return None;
+        }
+        Some(match &self.shapes[r.shape as usize] {
+            Shape::Mesh(m) => {
+                let (point, pdf) = m.sample(r.index, u);
+                ShapeSample { point, pdf }
+            }
+            Shape::Sphere(s) => s.sample_area(u),
+            Shape::Disk(d) => d.sample_area(u),
+        })
+    }
+
     /// Samples a point on primitive `i` as seen from `reference`; the density is per unit solid
     /// angle at `reference`.
     pub fn sample_from(&self, i: u32, reference: Vec3, u: Vec2) -> Option<ShapeSample> {

@@ -2,6 +2,7 @@
 //! lights, the sample record they return, and selection of a light in proportion to its power.
 
 pub mod area;
+pub mod emission;
 pub mod infinite;
 pub mod point;
 pub mod sampler;
@@ -10,6 +11,7 @@ pub mod sampler;
 mod tests;
 
 pub use area::AreaLight;
+pub use emission::{EmissionSample, SceneSphere};
 pub use infinite::{EnvironmentMap, InfiniteLight};
 pub use point::{DistantLight, PointLight, SpotLight};
 pub use sampler::LightSampler;

@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::geometry::{Disk, Geometry, Ray, RayShear, Shape, Sphere, TriangleMesh};
+use crate::light::SceneSphere;
 use crate::math::Mat3;
 use crate::math::frame::Frame;
 use crate::testing::{Binning, chi2_directions, chi2_p_value, chi2_sphere};
@@ -276,4 +277,53 @@ fn textured_area_light_radiance_follows_uv() {
     let avg = crate::math::luminance(Rgb::new(2.0, 0.0, 1.0)) * 0.5;
     let want = avg * geometry.area(2) * std::f32::consts::PI * 2.0;
     assert!((light.power(&geometry) - want).abs() < 1e-4 * want);
+}
+
+#[test]
+fn emission_sampling_is_consistent_and_carries_the_emitted_power() {
+    use std::f64::consts::PI;
+    let geometry = emitter_geometry();
+    let sphere = SceneSphere { center: Vec3::new(0.2, 0.1, 0.0), radius: 5.0 };
+    let area = |prim: u32, l: f32, two_sided: bool| {
+        Light::Area(AreaLight { prim, radiance: Rgb::splat(l).into(), scale: 1.0, two_sided })
+    };
+    let a = |prim: u32| f64::from(geometry.area(prim));
+    let r2 = 25.0;
+    let cases: Vec<(&str, Light, f64)> = vec![
+        ("triangle", area(0, 2.0, false), PI * a(0) * 2.0),
+        ("disk two-sided", area(2, 1.0, true), 2.0 * PI * a(2)),
+        ("sphere", area(1, 1.5, false), PI * a(1) * 1.5),
+        ("point", Light::Point(PointLight { position: Vec3::ONE, intensity: Rgb::splat(3.0) }), 4.0 * PI * 3.0),
+        (
+            "spot",
+            Light::Spot(SpotLight::new(Vec3::ZERO, Vec3::Z, Rgb::ONE, 30.0, 0.0)),
+            2.0 * PI * (1.0 - (PI / 6.0).cos()),
+        ),
+        ("distant", Light::Distant(DistantLight { to_light: Vec3::Y, radiance: Rgb::splat(2.0) }), PI * r2 * 2.0),
+        ("infinite", Light::Infinite(InfiniteLight::uniform(Rgb::ONE)), 4.0 * PI * PI * r2),
+    ];
+    let mut rng = crate::math::rng::Pcg32::new(12, 1);
+    for (name, light, want) in cases {
+        let n = 200_000;
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let u1 = Vec2::new(rng.next_f32(), rng.next_f32());
+            let u2 = Vec2::new(rng.next_f32(), rng.next_f32());
+            let Some(s) = light.sample_le(&geometry, sphere, u1, u2) else { continue };
+            let cos = if s.n == Vec3::ZERO { 1.0 } else { s.n.dot(s.ray.d).abs() };
+            let v = f64::from(crate::math::luminance(s.le) * cos / (s.pdf_pos * s.pdf_dir));
+            sum += v;
+            sum2 += v * v;
+            let (pp, pd) = light.pdf_le(&geometry, sphere, s.ray.d, s.n);
+            if !light.is_delta_position() {
+                assert!((pp - s.pdf_pos).abs() <= 1e-3 * s.pdf_pos, "{name}: pdf_pos {pp} vs {}", s.pdf_pos);
+            }
+            if !light.is_delta_direction() {
+                assert!((pd - s.pdf_dir).abs() <= 1e-3 * s.pdf_dir, "{name}: pdf_dir {pd} vs {}", s.pdf_dir);
+            }
+        }
+        let mean = sum / f64::from(n);
+        let se = ((sum2 / f64::from(n) - mean * mean).max(0.0) / f64::from(n)).sqrt();
+        assert!((mean - want).abs() < 4.0 * se + 1e-3 * want, "{name}: power {mean} ± {se}, expected {want}");
+    }
 }
