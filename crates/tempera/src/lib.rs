@@ -3,6 +3,7 @@
 //! line; loaders build scenes through [`scene::SceneBuilder`].
 
 pub mod accel;
+pub mod bidir;
 pub mod bsdf;
 pub mod geometry;
 pub mod math;

@@ -3,8 +3,10 @@
 //! linear RGB image.
 
 pub mod filter;
+pub mod splat;
 
 pub use filter::Filter;
+pub use splat::SplatBuffer;
 
 use crate::math::{Rgb, Vec2, is_valid_radiance};
 use crate::texture::Image;

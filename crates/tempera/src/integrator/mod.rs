@@ -2,12 +2,14 @@
 //! [`Integrator`] trait object); per-pixel estimators such as the path tracer plug into the tile
 //! driver in [`tiles`].
 
+pub mod bdpt;
 pub mod path;
 pub mod tiles;
 
 #[cfg(test)]
 mod tests;
 
+pub use bdpt::{BdptIntegrator, Strategies};
 pub use path::PathIntegrator;
 
 use crate::scene::Scene;
@@ -64,13 +66,14 @@ pub trait Integrator: Send + Sync {
 }
 
 /// Names accepted by [`create`].
-pub const INTEGRATORS: &[&str] = &["path"];
+pub const INTEGRATORS: &[&str] = &["path", "bdpt"];
 
 /// The integrator called `name`, with maximum path depth `max_depth` (pbrt's meaning: the number
 /// of scattering events).
 pub fn create(name: &str, max_depth: u32) -> Option<Box<dyn Integrator>> {
     match name {
         "path" => Some(Box::new(PathIntegrator::new(max_depth))),
+        "bdpt" => Some(Box::new(BdptIntegrator::new(max_depth))),
         _ => None,
     }
 }

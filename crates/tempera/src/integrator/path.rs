@@ -2,7 +2,7 @@
 //! power heuristic, and Russian roulette after a few bounces (Veach 1997 §9; pbrt-v4 §13.4).
 //! `max_depth` counts scattering events as pbrt does: 0 shows emitters only, 1 adds direct light.
 
-use super::tiles::{PixelEstimator, render_tiles};
+use super::tiles::{PixelEstimator, SampleCtx, render_tiles};
 use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
 use crate::bsdf::{SurfaceBsdf, TransportMode};
 use crate::geometry::{Ray, spawn_ray, spawn_ray_to};
@@ -78,14 +78,17 @@ struct PrevVertex {
 }
 
 impl PixelEstimator for PathIntegrator {
-    fn li<S: Sampler>(&self, scene: &Scene, mut ray: Ray, sampler: &mut S, rays: &mut u64) -> Rgb {
+    fn li<S: Sampler>(&self, scene: &Scene, mut ray: Ray, sampler: &mut S, ctx: &mut SampleCtx) -> Rgb {
+        let rays = &mut ctx.rays;
         let mut l = Rgb::ZERO;
         let mut beta = Rgb::ONE;
         let mut prev = PrevVertex { p: ray.o, bsdf_pdf: 0.0, specular: true };
         let mut depth = 0u32;
         sampler.start_stream(Stream::Camera);
         loop {
-            *rays += 1;
+            if depth > 0 {
+                *rays += 1;
+            }
             let Some(it) = scene.intersect(&ray) else {
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];

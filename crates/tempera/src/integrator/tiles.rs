@@ -1,12 +1,13 @@
 //! The tile driver for per-pixel estimators: the film is cut into tiles rendered in parallel
-//! (rayon), each into its own `f64` buffer, merged in tile order after each pass, so the image
-//! depends only on the seed and the number of samples, never on the thread count. Passes double
-//! in size (1, 1, 2, 4, … samples per pixel) so that time budgets and Ctrl-C stop between
-//! passes or, within a pass, between rows.
+//! (rayon), each into its own `f64` buffer, merged in tile order after each pass; contributions
+//! that land on other pixels (light tracing) go to per-thread fixed-point splat buffers whose
+//! merge is order-independent. The image therefore depends only on the seed and the number of
+//! samples, never on the thread count. Passes double in size (1, 1, 2, 4, … samples per pixel)
+//! so that time budgets and Ctrl-C stop between passes or, within a pass, between rows.
 
 use super::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats};
 use crate::camera::Camera;
-use crate::film::{Film, Tile, TileBuffer};
+use crate::film::{Film, SplatBuffer, Tile, TileBuffer};
 use crate::geometry::Ray;
 use crate::math::{Rgb, Vec2};
 use crate::sampler::{IndependentSampler, Sampler, Stream};
@@ -17,17 +18,32 @@ use std::time::Instant;
 
 const TILE_SIZE: u32 = 16;
 
+/// Per-thread state a sample may use: ray counting and a splat buffer.
+pub struct SampleCtx<'a> {
+    pub rays: u64,
+    /// Contributions to other pixels; scaled by 1/spp when the image is developed.
+    pub splats: &'a mut SplatBuffer,
+}
+
 /// Estimates the radiance arriving along a camera ray.
 pub trait PixelEstimator: Sync {
-    /// Radiance along `ray`; adds the rays it traces to `rays`.
-    fn li<S: Sampler>(&self, scene: &Scene, ray: Ray, sampler: &mut S, rays: &mut u64) -> Rgb;
+    /// True when the estimator splats onto other pixels (a full-size splat buffer per thread).
+    const SPLATS: bool = false;
+    /// Radiance along `ray` through raster position `raster`.
+    fn li<S: Sampler>(&self, scene: &Scene, ray: Ray, sampler: &mut S, ctx: &mut SampleCtx) -> Rgb;
 }
 
 struct TileResult {
     buffer: TileBuffer,
-    rays: u64,
     samples: u64,
     stopped: bool,
+}
+
+/// What one rayon task accumulated over the tiles it rendered.
+struct TaskState {
+    tiles: Vec<(usize, TileResult)>,
+    splats: SplatBuffer,
+    rays: u64,
 }
 
 struct Pass<'a> {
@@ -44,11 +60,12 @@ impl Pass<'_> {
         self.control.cancel.load(Ordering::Relaxed) || self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 
-    fn render_tile<E: PixelEstimator>(&self, estimator: &E, tile: Tile) -> TileResult {
+    fn render_tile<E: PixelEstimator>(&self, estimator: &E, tile: Tile, state: &mut TaskState) -> TileResult {
         let film = &self.scene.film;
         let camera: &Camera = &self.scene.camera;
         let mut buffer = TileBuffer::new(film, tile);
-        let (mut rays, mut samples, mut stopped) = (0u64, 0u64, false);
+        let (mut samples, mut stopped) = (0u64, false);
+        let mut ctx = SampleCtx { rays: 0, splats: &mut state.splats };
         for y in tile.y0..tile.y1 {
             if self.should_stop() {
                 stopped = true;
@@ -63,14 +80,16 @@ impl Pass<'_> {
                     let lens_u = sampler.next_2d();
                     let raster = Vec2::new(x as f32 + film_u.x, y as f32 + film_u.y);
                     let ray = camera.generate_ray(raster, lens_u);
-                    let l = estimator.li(self.scene, ray, &mut sampler, &mut rays);
+                    ctx.rays += 1;
+                    let l = estimator.li(self.scene, ray, &mut sampler, &mut ctx);
                     buffer.add_sample(raster, l);
                     samples += 1;
                 }
             }
             (self.control.on_progress)(u64::from(tile.x1 - tile.x0) * self.samples.len() as u64);
         }
-        TileResult { buffer, rays, samples, stopped }
+        state.rays += ctx.rays;
+        TileResult { buffer, samples, stopped }
     }
 }
 
@@ -84,6 +103,8 @@ pub fn render_tiles<E: PixelEstimator>(
     let start = Instant::now();
     let tiles = scene.film.tiles(TILE_SIZE);
     let mut film = Film::new(scene.film);
+    let (sw, sh) = if E::SPLATS { (scene.film.width, scene.film.height) } else { (0, 0) };
+    let mut splats = SplatBuffer::new(sw, sh);
     let mut stats = RenderStats::default();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
@@ -106,12 +127,30 @@ pub fn render_tiles<E: PixelEstimator>(
         if control.cancel.load(Ordering::Relaxed) || pass.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        let results: Vec<TileResult> =
-            pool.install(|| tiles.par_iter().map(|&t| pass.render_tile(estimator, t)).collect());
+        let tasks: Vec<TaskState> = pool.install(|| {
+            tiles
+                .par_iter()
+                .enumerate()
+                .fold(
+                    || TaskState { tiles: Vec::new(), splats: SplatBuffer::new(sw, sh), rays: 0 },
+                    |mut state, (i, &t)| {
+                        let r = pass.render_tile(estimator, t, &mut state);
+                        state.tiles.push((i, r));
+                        state
+                    },
+                )
+                .collect()
+        });
+        let mut results: Vec<(usize, TileResult)> = Vec::with_capacity(tiles.len());
+        for task in tasks {
+            splats.merge(&task.splats);
+            stats.rays += task.rays;
+            results.extend(task.tiles);
+        }
+        results.sort_by_key(|(i, _)| *i);
         let mut stopped = false;
-        for r in &results {
+        for (_, r) in &results {
             film.merge(&r.buffer);
-            stats.rays += r.rays;
             stats.pixel_samples += r.samples;
             stopped |= r.stopped;
         }
@@ -121,8 +160,17 @@ pub fn render_tiles<E: PixelEstimator>(
         done += size;
     }
     stats.spp_completed = done;
-    stats.invalid_samples = film.invalid_samples;
+    stats.invalid_samples = film.invalid_samples + splats.invalid;
     stats.cancelled = control.cancel.load(Ordering::Relaxed);
     stats.seconds = start.elapsed().as_secs_f64();
-    RenderOutput { image: film.develop(), stats }
+    let mut image = film.develop();
+    if E::SPLATS && stats.pixel_samples > 0 {
+        // Splats estimate the image per sample: divide by the samples per pixel.
+        let pixels = f64::from(scene.film.width) * f64::from(scene.film.height);
+        let splat = splats.image(pixels / stats.pixel_samples as f64);
+        for (p, s) in image.pixels.iter_mut().zip(&splat.pixels) {
+            *p += *s;
+        }
+    }
+    RenderOutput { image, stats }
 }

@@ -35,7 +35,7 @@ impl AreaLight {
             return None;
         }
         let wi = delta / dist;
-        Some(LightSample { li: self.l(&s.point, -wi), wi, p: s.point.p, dist, pdf: s.pdf, delta: false })
+        Some(LightSample { li: self.l(&s.point, -wi), wi, p: s.point.p, n: s.point.ng, dist, pdf: s.pdf, delta: false })
     }
 
     pub fn pdf_li(&self, geometry: &Geometry, reference: Vec3, hit: &SurfacePoint) -> f32 {

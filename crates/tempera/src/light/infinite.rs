@@ -108,7 +108,15 @@ impl InfiniteLight {
                 ((self.to_world * d).normalize(), pdf_uv * jacobian)
             }
         };
-        Some(LightSample { li: self.le(wi), wi, p: reference + wi * 1e7, dist: f32::INFINITY, pdf, delta: false })
+        Some(LightSample {
+            li: self.le(wi),
+            wi,
+            p: reference + wi * 1e7,
+            n: Vec3::ZERO,
+            dist: f32::INFINITY,
+            pdf,
+            delta: false,
+        })
     }
 
     /// Solid-angle density of [`Self::sample_li`].

@@ -28,6 +28,8 @@ pub struct LightSample {
     pub wi: Vec3,
     /// The sampled point on the light (for shadow rays); far away for directional lights.
     pub p: Vec3,
+    /// Surface normal at `p` for area lights, zero otherwise.
+    pub n: Vec3,
     /// Distance to `p`; infinite for directional and environment lights.
     pub dist: f32,
     /// Solid-angle density, or 1 for delta lights.

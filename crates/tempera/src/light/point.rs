@@ -21,7 +21,15 @@ impl PointLight {
             return None;
         }
         let dist = d2.sqrt();
-        Some(LightSample { li: self.intensity / d2, wi: delta / dist, p: self.position, dist, pdf: 1.0, delta: true })
+        Some(LightSample {
+            li: self.intensity / d2,
+            wi: delta / dist,
+            p: self.position,
+            n: Vec3::ZERO,
+            dist,
+            pdf: 1.0,
+            delta: true,
+        })
     }
 
     pub fn power(&self) -> f32 {
@@ -74,7 +82,7 @@ impl SpotLight {
         }
         let dist = d2.sqrt();
         let wi = delta / dist;
-        Some(LightSample { li: self.i(-wi) / d2, wi, p: self.position, dist, pdf: 1.0, delta: true })
+        Some(LightSample { li: self.i(-wi) / d2, wi, p: self.position, n: Vec3::ZERO, dist, pdf: 1.0, delta: true })
     }
 
     pub fn power(&self) -> f32 {
@@ -96,6 +104,7 @@ impl DistantLight {
             li: self.radiance,
             wi: self.to_light,
             p: reference + self.to_light * 1e7,
+            n: Vec3::ZERO,
             dist: f32::INFINITY,
             pdf: 1.0,
             delta: true,

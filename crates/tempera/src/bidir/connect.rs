@@ -1,0 +1,174 @@
+//! Evaluation of one bidirectional strategy `(s, t)`: `s` light-subpath vertices joined to `t`
+//! camera-subpath vertices (Veach 1997 §10.2; pbrt-v4 §13.3.4). The result keeps the
+//! unweighted contribution, its MIS weight, the raster position for `t = 1`, and the factors of
+//! the connection (BSDF values at both connection vertices and the geometry term), so that a
+//! caller can evaluate one strategy alone (MMLT) or re-evaluate it with other BSDFs.
+
+use super::mis::{Heuristic, mis_weight};
+use super::vertex::{Vertex, VertexKind};
+use crate::bsdf::TransportMode;
+use crate::geometry::{Ray, spawn_ray_to};
+use crate::math::{Rgb, Vec2, Vec3};
+use crate::sampler::{Sampler, Stream};
+use crate::scene::Scene;
+
+/// One evaluated strategy.
+#[derive(Clone, Copy, Debug)]
+pub struct Connection {
+    /// Unweighted contribution `f/p` of the path.
+    pub l: Rgb,
+    pub weight: f32,
+    /// Raster position of the path (only for `t = 1`; otherwise the camera ray's pixel).
+    pub raster: Option<Vec2>,
+    /// BSDF (or emission) value at the light-side connection vertex towards the camera side.
+    pub f_light: Rgb,
+    /// BSDF value at the camera-side connection vertex towards the light side.
+    pub f_camera: Rgb,
+    /// Geometry term between the connection vertices (1 when no edge is created).
+    pub g: f32,
+}
+
+/// Geometric coupling `|cos θ₀| |cos θ₁| / d²` with shading normals, or 0 when occluded.
+fn geometry(scene: &Scene, a: &Vertex, b: &Vertex, rays: &mut u64) -> f32 {
+    let (w, d2) = a.towards(b);
+    if d2 == 0.0 || !d2.is_finite() {
+        return 0.0;
+    }
+    let mut g = 1.0 / d2;
+    if a.is_on_surface() {
+        g *= a.ns.dot(w).abs();
+    }
+    if b.is_on_surface() {
+        g *= b.ns.dot(w).abs();
+    }
+    if g == 0.0 {
+        return 0.0;
+    }
+    *rays += 1;
+    if visible(scene, a, b) { g } else { 0.0 }
+}
+
+fn visible(scene: &Scene, a: &Vertex, b: &Vertex) -> bool {
+    let origin_normal = if a.is_on_surface() { a.ng } else { Vec3::ZERO };
+    let (ray, t_max) = if origin_normal == Vec3::ZERO {
+        let (w, d2) = a.towards(b);
+        (Ray::new(a.p, w), d2.sqrt() * (1.0 - 1e-4))
+    } else {
+        spawn_ray_to(a.p, origin_normal, b.p)
+    };
+    let t_max = if b.infinite { f32::INFINITY } else { t_max - if b.is_on_surface() { 1e-4 } else { 0.0 } };
+    !scene.occluded(&ray, t_max)
+}
+
+/// A light and a camera subpath.
+#[derive(Clone, Copy, Debug)]
+pub struct Subpaths<'a> {
+    pub light: &'a [Vertex],
+    pub camera: &'a [Vertex],
+}
+
+/// Evaluates strategy `(s, t)`. Numbers for sampling a new endpoint (`s = 1`, `t = 1`) come
+/// from [`Stream::Connection`].
+pub fn connect<S: Sampler>(
+    scene: &Scene,
+    paths: Subpaths,
+    (s, t): (usize, usize),
+    sampler: &mut S,
+    heuristic: Heuristic,
+    rays: &mut u64,
+) -> Option<Connection> {
+    let Subpaths { light, camera } = paths;
+    if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::Light {
+        return None;
+    }
+    let mut sampled: Option<Vertex> = None;
+    let mut raster = None;
+    let (mut f_light, mut f_camera, mut g) = (Rgb::ONE, Rgb::ONE, 1.0);
+    let l = if s == 0 {
+        let pt = &camera[t - 1];
+        if !pt.is_light() {
+            return None;
+        }
+        f_light = pt.le(scene, &camera[t - 2]);
+        f_light * pt.beta
+    } else if t == 1 {
+        let qs = &light[s - 1];
+        if !qs.connectible(scene) {
+            return None;
+        }
+        sampler.start_stream(Stream::Connection);
+        let u = sampler.next_2d();
+        let cs = scene.camera.sample_wi(qs.p, u)?;
+        if cs.pdf.is_nan() || cs.pdf <= 0.0 || cs.importance.max_element() <= 0.0 {
+            return None;
+        }
+        let mut v = Vertex::camera(cs.p_lens, cs.importance / cs.pdf);
+        v.pdf_fwd = 0.0;
+        raster = Some(cs.raster);
+        f_light = qs.f(&v, TransportMode::Importance);
+        let mut l = qs.beta * f_light * v.beta;
+        if qs.is_on_surface() {
+            l *= qs.ns.dot(cs.wi).abs();
+        }
+        if l.max_element() > 0.0 {
+            *rays += 1;
+            if !visible(scene, qs, &v) {
+                return None;
+            }
+        }
+        sampled = Some(v);
+        l
+    } else if s == 1 {
+        let pt = &camera[t - 1];
+        if !pt.connectible(scene) {
+            return None;
+        }
+        sampler.start_stream(Stream::Connection);
+        let u_light = sampler.next_1d();
+        let u = sampler.next_2d();
+        let (index, pmf) = scene.light_sampler.sample(u_light)?;
+        let light_ref = &scene.lights[index];
+        let ls = light_ref.sample_li(&scene.geometry, pt.p, u)?;
+        let infinite = light_ref.is_infinite() || light_ref.is_delta_direction();
+        let mut v = Vertex::light(
+            index as u32,
+            ls.p,
+            if infinite { Vec3::ZERO } else { ls.n },
+            ls.li / (ls.pdf * pmf),
+            0.0,
+            infinite,
+        );
+        v.pdf_fwd = v.pdf_light_origin(scene, pt);
+        f_camera = pt.f(&v, TransportMode::Radiance);
+        let mut l = pt.beta * f_camera * v.beta;
+        if pt.is_on_surface() {
+            l *= pt.ns.dot(ls.wi).abs();
+        }
+        if l.max_element() > 0.0 {
+            *rays += 1;
+            if !visible(scene, pt, &v) {
+                return None;
+            }
+        }
+        sampled = Some(v);
+        l
+    } else {
+        let (qs, pt) = (&light[s - 1], &camera[t - 1]);
+        if !qs.connectible(scene) || !pt.connectible(scene) {
+            return None;
+        }
+        f_light = qs.f(pt, TransportMode::Importance);
+        f_camera = pt.f(qs, TransportMode::Radiance);
+        let l = qs.beta * f_light * f_camera * pt.beta;
+        if l.max_element() <= 0.0 {
+            return None;
+        }
+        g = geometry(scene, qs, pt, rays);
+        l * g
+    };
+    if !l.is_finite() || l.max_element() <= 0.0 {
+        return None;
+    }
+    let weight = mis_weight(scene, light, camera, sampled.as_ref(), s, t, heuristic);
+    Some(Connection { l, weight, raster, f_light, f_camera, g })
+}

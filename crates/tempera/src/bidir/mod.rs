@@ -1,0 +1,15 @@
+//! The bidirectional path machinery shared by BDPT and every MCMC integrator: vertices with
+//! their densities, subpath random walks, evaluation of one strategy at a time, and MIS.
+
+pub mod connect;
+pub mod mis;
+pub mod subpath;
+pub mod vertex;
+
+#[cfg(test)]
+mod tests;
+
+pub use connect::{Connection, Subpaths, connect};
+pub use mis::{Heuristic, mis_weight};
+pub use subpath::{camera_subpath, light_subpath};
+pub use vertex::{Vertex, VertexKind};

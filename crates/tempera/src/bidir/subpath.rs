@@ -1,0 +1,154 @@
+//! Camera and light subpaths by random walks (Veach 1997 §10.2; pbrt-v4 §13.3.3), generic over
+//! the sampler so that BDPT and the primary-sample-space MCMC integrators share them. The camera
+//! subpath reads [`Stream::Camera`], the light subpath [`Stream::Light`].
+
+use super::vertex::{Vertex, VertexKind, infinite_light_density, scene_sphere};
+use crate::bsdf::TransportMode;
+use crate::geometry::{Ray, spawn_ray};
+use crate::math::Rgb;
+use crate::sampler::{Sampler, Stream};
+use crate::scene::Scene;
+
+/// The start of a random walk: throughput, direction density and length limit.
+struct Walk {
+    beta: Rgb,
+    pdf_dir: f32,
+    bounces: usize,
+    mode: TransportMode,
+}
+
+/// Extends `path` from its last vertex along `ray` for at most `walk.bounces` more vertices.
+fn random_walk<S: Sampler>(
+    scene: &Scene,
+    mut ray: Ray,
+    sampler: &mut S,
+    walk: Walk,
+    path: &mut Vec<Vertex>,
+    rays: &mut u64,
+) {
+    let Walk { mut beta, pdf_dir, bounces, mode } = walk;
+    let mut pdf_fwd = pdf_dir;
+    for _ in 0..bounces {
+        *rays += 1;
+        let prev = *path.last().expect("a subpath starts at an endpoint");
+        let Some(it) = scene.intersect(&ray) else {
+            if mode == TransportMode::Radiance && !scene.infinite_lights.is_empty() {
+                path.push(Vertex::escaped(&ray, scene, beta, pdf_fwd));
+            }
+            return;
+        };
+        let bsdf = scene.bsdf(&it);
+        let s = it.surface;
+        let mut v = Vertex {
+            kind: VertexKind::Surface,
+            p: s.p,
+            ng: s.ng,
+            ns: bsdf.frame.n,
+            surface: Some(s),
+            bsdf: Some(bsdf),
+            wo: it.wo,
+            beta,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+            delta: false,
+            light: scene.area_light(it.prim).map(|(i, _)| i),
+            infinite: false,
+        };
+        v.pdf_fwd = prev.convert_density(pdf_fwd, &v);
+        path.push(v);
+        let uc = sampler.next_1d();
+        let u = sampler.next_2d();
+        let Some(bs) = bsdf.sample(it.wo, uc, u, mode) else { return };
+        let cos = bs.wi.dot(bsdf.frame.n).abs();
+        beta *= bs.f * (cos / bs.pdf);
+        if mode == TransportMode::Importance {
+            beta *= shading_normal_correction(it.wo, bs.wi, s.ng, bsdf.frame.n);
+        }
+        let mut pdf_rev = bsdf.pdf(bs.wi, it.wo);
+        pdf_fwd = bs.pdf;
+        let n = path.len();
+        if bs.delta {
+            path[n - 1].delta = true;
+            pdf_fwd = 0.0;
+            pdf_rev = 0.0;
+        }
+        let (cur, prev) = (path[n - 1], path[n - 2]);
+        path[n - 2].pdf_rev = cur.convert_density(pdf_rev, &prev);
+        if !beta.is_finite() || beta.max_element() <= 0.0 {
+            return;
+        }
+        ray = spawn_ray(s.p, s.ng, bs.wi);
+    }
+}
+
+/// Veach's correction for shading normals in adjoint transport (Veach 1997, §5.3).
+fn shading_normal_correction(
+    wo: crate::math::Vec3,
+    wi: crate::math::Vec3,
+    ng: crate::math::Vec3,
+    ns: crate::math::Vec3,
+) -> f32 {
+    let denom = wo.dot(ng).abs() * wi.dot(ns).abs();
+    if denom == 0.0 { 0.0 } else { wo.dot(ns).abs() * wi.dot(ng).abs() / denom }
+}
+
+/// The camera subpath through `ray` (at most `max_depth + 2` vertices, the camera included).
+pub fn camera_subpath<S: Sampler>(
+    scene: &Scene,
+    ray: Ray,
+    sampler: &mut S,
+    max_depth: u32,
+    path: &mut Vec<Vertex>,
+    rays: &mut u64,
+) {
+    path.clear();
+    sampler.start_stream(Stream::Camera);
+    let (_, pdf_dir) = scene.camera.pdf_we(&ray);
+    path.push(Vertex::camera(ray.o, Rgb::ONE));
+    if pdf_dir > 0.0 {
+        let walk = Walk { beta: Rgb::ONE, pdf_dir, bounces: max_depth as usize + 1, mode: TransportMode::Radiance };
+        random_walk(scene, ray, sampler, walk, path, rays);
+    }
+}
+
+/// A light subpath (at most `max_depth + 1` vertices, the light included).
+pub fn light_subpath<S: Sampler>(
+    scene: &Scene,
+    sampler: &mut S,
+    max_depth: u32,
+    path: &mut Vec<Vertex>,
+    rays: &mut u64,
+) {
+    path.clear();
+    sampler.start_stream(Stream::Light);
+    let u_light = sampler.next_1d();
+    let u_pos = sampler.next_2d();
+    let u_dir = sampler.next_2d();
+    let Some((index, pmf)) = scene.light_sampler.sample(u_light) else { return };
+    let light = &scene.lights[index];
+    let Some(e) = light.sample_le(&scene.geometry, scene_sphere(scene), u_pos, u_dir) else { return };
+    let infinite = light.is_infinite() || light.is_delta_direction();
+    let mut v0 = Vertex::light(
+        index as u32,
+        e.ray.o,
+        if infinite { crate::math::Vec3::ZERO } else { e.n },
+        e.le,
+        pmf * e.pdf_pos,
+        infinite,
+    );
+    if light.is_infinite() {
+        v0.pdf_fwd = infinite_light_density(scene, e.ray.d);
+    }
+    path.push(v0);
+    let cos = if e.n == crate::math::Vec3::ZERO || infinite { 1.0 } else { e.n.dot(e.ray.d).abs() };
+    let beta = e.le * (cos / (pmf * e.pdf_pos * e.pdf_dir));
+    let walk = Walk { beta, pdf_dir: e.pdf_dir, bounces: max_depth as usize, mode: TransportMode::Importance };
+    random_walk(scene, e.ray, sampler, walk, path, rays);
+    // Positions on the emitting disk of an infinite light are planar: the first surface vertex's
+    // density is the disk's, projected (pbrt-v4 §13.3.3).
+    if infinite && path.len() > 1 {
+        let w = e.ray.d;
+        let v1 = &mut path[1];
+        v1.pdf_fwd = e.pdf_pos * if v1.is_on_surface() { v1.ng.dot(w).abs() } else { 1.0 };
+    }
+}
