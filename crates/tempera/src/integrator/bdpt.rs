@@ -23,6 +23,8 @@ pub enum Strategies {
     LightTracing,
     /// Only camera paths that hit emitters (`s = 0`, `t ≥ 3`), unweighted.
     PathTracing,
+    /// One strategy `(s, t)`, unweighted.
+    Only(usize, usize),
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -42,6 +44,7 @@ impl BdptIntegrator {
             Strategies::All => true,
             Strategies::LightTracing => t == 1,
             Strategies::PathTracing => s == 0 && t >= 3,
+            Strategies::Only(a, b) => (s, t) == (a, b),
         }
     }
 }

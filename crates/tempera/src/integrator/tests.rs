@@ -173,3 +173,113 @@ fn next_event_estimation_agrees_with_bsdf_sampling_on_a_cornell_box() {
     let (ma, mb) = (mean(&a), mean(&b));
     assert!((ma / mb - 1.0).abs() < 0.03, "image means {ma} vs {mb}");
 }
+
+/// Compares two renders block by block (z-test on block means) and by image mean.
+fn assert_agree(name: &str, a: &crate::texture::Image, b: &crate::texture::Image, block: usize, mean_tol: f64) {
+    let (ba, bb) = (block_stats(a, block), block_stats(b, block));
+    let mut beyond = 0;
+    for ((ma, sa), (mb, sb)) in ba.iter().zip(&bb) {
+        let se = (sa * sa + sb * sb).sqrt();
+        if (ma - mb).abs() > 4.0 * se + 1e-3 {
+            beyond += 1;
+        }
+    }
+    assert!(beyond == 0, "{name}: {beyond} of {} blocks differ beyond 4σ", ba.len());
+    // The image mean, with its standard error propagated from the blocks: a z-test, plus a
+    // relative bound.
+    let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
+    let se = |s: &[(f64, f64)]| s.iter().map(|v| v.1 * v.1).sum::<f64>().sqrt() / s.len() as f64;
+    let (ma, mb) = (mean(&ba), mean(&bb));
+    let z = (ma - mb).abs() / (se(&ba).powi(2) + se(&bb).powi(2)).sqrt();
+    assert!(z < 4.0 || (ma / mb - 1.0).abs() < mean_tol, "{name}: image means {ma} vs {mb} (z = {z:.1})");
+}
+
+#[test]
+fn bdpt_passes_the_white_furnace() {
+    check_furnace(&BdptIntegrator::new(8), 16);
+}
+
+#[test]
+fn bdpt_agrees_with_the_path_tracer_on_a_cornell_box() {
+    let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
+    let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(64), 21, 0);
+    let path = render_with(&scene, &PathIntegrator::new(5), Budget::Samples(256), 22, 0);
+    assert_eq!(bdpt.stats.invalid_samples, 0);
+    assert_agree("bdpt vs path", &bdpt.image, &path.image, 8, 0.01);
+}
+
+#[test]
+fn light_tracing_alone_agrees_with_path_tracing_alone_in_the_furnace() {
+    // Environment light: exercises emission from the disk covering the scene.
+    let scene = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
+    let (sphere, _) = classify_furnace_pixels(&scene);
+    let lt = BdptIntegrator { strategies: Strategies::Only(2, 1), ..BdptIntegrator::new(1) };
+    let out = render_with(&scene, &lt, Budget::Samples(64), 3, 0);
+    let values: Vec<f64> = sphere.iter().map(|&i| f64::from(out.image.pixels[i].y)).collect();
+    let (mean, se) = mean_and_se(&values);
+    assert!((mean - 0.8).abs() < 4.0 * se + 2e-3, "light tracing alone: {mean} ± {se}, expected 0.8");
+}
+
+#[test]
+fn light_tracing_alone_agrees_with_path_tracing_alone() {
+    let scene = crate::scenes::cornell_box(24, 24).build().unwrap();
+    let lt = BdptIntegrator { strategies: Strategies::LightTracing, ..BdptIntegrator::new(4) };
+    let pt = BdptIntegrator { strategies: Strategies::PathTracing, ..BdptIntegrator::new(4) };
+    let a = render_with(&scene, &lt, Budget::Samples(128), 31, 0);
+    let b = render_with(&scene, &pt, Budget::Samples(512), 32, 0);
+    assert_agree("light tracing vs path tracing", &a.image, &b.image, 8, 0.03);
+}
+
+/// A Cornell box with a perfect mirror sphere and a smooth glass sphere.
+fn delta_box() -> Scene {
+    use crate::geometry::{Shape, Sphere};
+    use crate::material::{ConductorFresnel, ConductorMaterial, DielectricMaterial, Material, Roughness};
+    let mut b = crate::scenes::cornell_box(32, 32);
+    let mirror = b.add_material(Material::Conductor(ConductorMaterial {
+        fresnel: ConductorFresnel::Reflectance(Rgb::splat(0.9).into()),
+        roughness: Roughness::alpha(0.0),
+        tint: 1.0.into(),
+    }));
+    let glass = b.add_material(Material::Dielectric(DielectricMaterial { eta: 1.5, roughness: Roughness::alpha(0.0) }));
+    b.add_shape(
+        Shape::Sphere(Sphere {
+            center: crate::math::Vec3::new(-0.45, 0.3, 0.3),
+            radius: 0.3,
+            reverse_orientation: false,
+        }),
+        mirror,
+        None,
+    );
+    b.add_shape(
+        Shape::Sphere(Sphere {
+            center: crate::math::Vec3::new(0.4, 1.2, 0.2),
+            radius: 0.25,
+            reverse_orientation: false,
+        }),
+        glass,
+        None,
+    );
+    b.build().unwrap()
+}
+
+#[test]
+fn bdpt_renders_delta_materials_like_the_path_tracer() {
+    let scene = delta_box();
+    let bdpt = render_with(&scene, &BdptIntegrator::new(6), Budget::Samples(64), 41, 0);
+    let path = render_with(&scene, &PathIntegrator::new(6), Budget::Samples(256), 42, 0);
+    assert_agree("delta box", &bdpt.image, &path.image, 8, 0.02);
+}
+
+#[test]
+fn bdpt_is_bit_identical_at_any_thread_count() {
+    let mut scene = crate::scenes::default_scene().build().unwrap();
+    scene.set_resolution(32, 24);
+    let integrator = BdptIntegrator::new(5);
+    let a = render_with(&scene, &integrator, Budget::Samples(4), 5, 1);
+    let b = render_with(&scene, &integrator, Budget::Samples(4), 5, 2);
+    let c = render_with(&scene, &integrator, Budget::Samples(4), 5, 3);
+    assert!(
+        a.image.pixels == b.image.pixels && b.image.pixels == c.image.pixels,
+        "splats must merge deterministically"
+    );
+}

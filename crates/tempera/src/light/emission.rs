@@ -37,7 +37,7 @@ pub struct EmissionSample {
 fn disk_origin(sphere: SceneSphere, dir: Vec3, u: Vec2) -> Vec3 {
     let frame = Frame::from_z(dir);
     let d = concentric_disk(u) * sphere.radius;
-    sphere.center + sphere.radius * (frame.s * d.x + frame.t * d.y) - dir * sphere.radius
+    sphere.center + frame.s * d.x + frame.t * d.y - dir * sphere.radius
 }
 
 impl Light {
