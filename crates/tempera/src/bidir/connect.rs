@@ -4,7 +4,7 @@
 //! the connection (BSDF values at both connection vertices and the geometry term), so that a
 //! caller can evaluate one strategy alone (MMLT) or re-evaluate it with other BSDFs.
 
-use super::mis::{Heuristic, mis_weight};
+use super::mis::{Heuristic, ReversePdfs, mis_weight_with, reverse_pdfs};
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, spawn_ray_to};
@@ -26,6 +26,8 @@ pub struct Connection {
     pub f_camera: Rgb,
     /// Geometry term between the connection vertices (1 when no edge is created).
     pub g: f32,
+    /// Reverse densities around the connection that entered the MIS weight.
+    pub rev: ReversePdfs,
 }
 
 /// Geometric coupling `|cos θ₀| |cos θ₁| / d²` with shading normals, or 0 when occluded.
@@ -169,6 +171,8 @@ pub fn connect<S: Sampler>(
     if !l.is_finite() || l.max_element() <= 0.0 {
         return None;
     }
-    let weight = mis_weight(scene, light, camera, sampled.as_ref(), s, t, heuristic);
-    Some(Connection { l, weight, raster, f_light, f_camera, g })
+    let rev =
+        if s + t == 2 { ReversePdfs::default() } else { reverse_pdfs(scene, light, camera, sampled.as_ref(), s, t) };
+    let weight = mis_weight_with(scene, light, camera, sampled.as_ref(), (s, t), &rev, heuristic);
+    Some(Connection { l, weight, raster, f_light, f_camera, g, rev })
 }

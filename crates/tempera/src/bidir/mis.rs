@@ -18,6 +18,68 @@ fn remap0(x: f32) -> f32 {
     if x != 0.0 { x } else { 1.0 }
 }
 
+/// The reverse densities MIS needs around a connection: of the camera-side endpoint `pt` and
+/// its predecessor, and of the light-side endpoint `qs` and its predecessor, each as if sampled
+/// from the other side through the connection. They depend on the BSDFs at the two connection
+/// vertices, so re-evaluating a path with other BSDFs there means recomputing them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ReversePdfs {
+    pub pt: f32,
+    pub pt_minus: f32,
+    pub qs: f32,
+    pub qs_minus: f32,
+}
+
+/// The connection endpoints of strategy `(s, t)`, with the freshly sampled one substituted.
+struct Endpoints {
+    qs: Option<Vertex>,
+    pt: Option<Vertex>,
+    qs_minus: Option<Vertex>,
+    pt_minus: Option<Vertex>,
+}
+
+fn endpoints(light: &[Vertex], camera: &[Vertex], sampled: Option<&Vertex>, s: usize, t: usize) -> Endpoints {
+    Endpoints {
+        qs: (s > 0).then(|| if s == 1 { sampled.copied().unwrap_or(light[0]) } else { light[s - 1] }),
+        pt: (t > 0).then(|| if t == 1 { sampled.copied().unwrap_or(camera[0]) } else { camera[t - 1] }),
+        qs_minus: (s > 1).then(|| light[s - 2]),
+        pt_minus: (t > 1).then(|| camera[t - 2]),
+    }
+}
+
+/// The reverse densities of strategy `(s, t)`.
+pub fn reverse_pdfs(
+    scene: &Scene,
+    light: &[Vertex],
+    camera: &[Vertex],
+    sampled: Option<&Vertex>,
+    s: usize,
+    t: usize,
+) -> ReversePdfs {
+    let Endpoints { qs, pt, qs_minus, pt_minus } = endpoints(light, camera, sampled, s, t);
+    let pt_rev = pt.map_or(0.0, |pt| match (&qs, &pt_minus) {
+        (Some(q), _) => q.pdf(scene, qs_minus.as_ref(), &pt),
+        (None, Some(pm)) => pt.pdf_light_origin(scene, pm),
+        (None, None) => 0.0,
+    });
+    let pt_minus_rev = match (&pt, &pt_minus) {
+        (Some(p), Some(pm)) => match &qs {
+            Some(q) => p.pdf(scene, Some(q), pm),
+            None => p.pdf_light(scene, pm),
+        },
+        _ => 0.0,
+    };
+    let qs_rev = match (&qs, &pt) {
+        (Some(q), Some(p)) => p.pdf(scene, pt_minus.as_ref(), q),
+        _ => 0.0,
+    };
+    let qs_minus_rev = match (&qs, &qs_minus) {
+        (Some(q), Some(qm)) => q.pdf(scene, pt.as_ref(), qm),
+        _ => 0.0,
+    };
+    ReversePdfs { pt: pt_rev, pt_minus: pt_minus_rev, qs: qs_rev, qs_minus: qs_minus_rev }
+}
+
 /// The MIS weight of strategy `(s, t)`; `sampled` replaces the connecting endpoint when it was
 /// sampled anew (`s = 1` or `t = 1`).
 pub fn mis_weight(
@@ -32,43 +94,33 @@ pub fn mis_weight(
     if s + t == 2 {
         return 1.0;
     }
+    let rev = reverse_pdfs(scene, light, camera, sampled, s, t);
+    mis_weight_with(scene, light, camera, sampled, (s, t), &rev, heuristic)
+}
+
+/// The MIS weight of strategy `(s, t)` from given reverse densities around the connection.
+pub fn mis_weight_with(
+    scene: &Scene,
+    light: &[Vertex],
+    camera: &[Vertex],
+    sampled: Option<&Vertex>,
+    (s, t): (usize, usize),
+    rev: &ReversePdfs,
+    heuristic: Heuristic,
+) -> f32 {
+    if s + t == 2 {
+        return 1.0;
+    }
     let power = |r: f32| match heuristic {
         Heuristic::Power => r * r,
         Heuristic::Balance => r,
     };
-    // The connection endpoints, with the freshly sampled one substituted.
-    let qs = (s > 0).then(|| if s == 1 { sampled.copied().unwrap_or(light[0]) } else { light[s - 1] });
-    let pt = (t > 0).then(|| if t == 1 { sampled.copied().unwrap_or(camera[0]) } else { camera[t - 1] });
-    let qs_minus = (s > 1).then(|| light[s - 2]);
-    let pt_minus = (t > 1).then(|| camera[t - 2]);
-
-    // Reverse densities of the four vertices around the connection.
-    let pt_rev = pt.map(|pt| match (&qs, &pt_minus) {
-        (Some(q), _) => q.pdf(scene, qs_minus.as_ref(), &pt),
-        (None, Some(pm)) => pt.pdf_light_origin(scene, pm),
-        (None, None) => 0.0,
-    });
-    let pt_minus_rev = match (&pt, &pt_minus) {
-        (Some(p), Some(pm)) => Some(match &qs {
-            Some(q) => p.pdf(scene, Some(q), pm),
-            None => p.pdf_light(scene, pm),
-        }),
-        _ => None,
-    };
-    let qs_rev = match (&qs, &pt) {
-        (Some(q), Some(p)) => Some(p.pdf(scene, pt_minus.as_ref(), q)),
-        _ => None,
-    };
-    let qs_minus_rev = match (&qs, &qs_minus) {
-        (Some(q), Some(qm)) => Some(q.pdf(scene, pt.as_ref(), qm)),
-        _ => None,
-    };
-
+    let Endpoints { qs, pt, .. } = endpoints(light, camera, sampled, s, t);
     let cam_rev = |i: usize| {
         if i + 1 == t {
-            pt_rev.unwrap_or(0.0)
+            rev.pt
         } else if i + 2 == t {
-            pt_minus_rev.unwrap_or(0.0)
+            rev.pt_minus
         } else {
             camera[i].pdf_rev
         }
@@ -83,12 +135,11 @@ pub fn mis_weight(
             sum += power(ri);
         }
     }
-
     let light_rev = |i: usize| {
         if i + 1 == s {
-            qs_rev.unwrap_or(0.0)
+            rev.qs
         } else if i + 2 == s {
-            qs_minus_rev.unwrap_or(0.0)
+            rev.qs_minus
         } else {
             light[i].pdf_rev
         }

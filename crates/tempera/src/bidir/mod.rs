@@ -10,6 +10,6 @@ pub mod vertex;
 mod tests;
 
 pub use connect::{Connection, Subpaths, connect};
-pub use mis::{Heuristic, mis_weight};
+pub use mis::{Heuristic, ReversePdfs, mis_weight, mis_weight_with, reverse_pdfs};
 pub use subpath::{camera_subpath, light_subpath};
 pub use vertex::{Vertex, VertexKind};

@@ -90,3 +90,30 @@ fn mis_weights_over_all_strategies_sum_to_one() {
         }
     }
 }
+
+#[test]
+fn connections_expose_what_re_evaluation_needs() {
+    let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
+    let (mut camera, mut light, mut rays) = (Vec::new(), Vec::new(), 0);
+    let mut checked = 0;
+    for i in 0..2000u64 {
+        let mut sampler = IndependentSampler::new(9, i);
+        let ray = scene.camera.generate_ray(Vec2::new(16.3, 12.7), Vec2::splat(0.5));
+        camera_subpath(&scene, ray, &mut sampler, 5, &mut camera, &mut rays);
+        light_subpath(&scene, &mut sampler, 5, &mut light, &mut rays);
+        for t in 2..=camera.len() {
+            for s in 2..=light.len() {
+                let paths = Subpaths { light: &light, camera: &camera };
+                let Some(c) = connect(&scene, paths, (s, t), &mut sampler, Heuristic::Power, &mut rays) else {
+                    continue;
+                };
+                let w = mis_weight_with(&scene, &light, &camera, None, (s, t), &c.rev, Heuristic::Power);
+                assert_eq!(w, c.weight, "the exposed reverse densities reproduce the weight");
+                let l = light[s - 1].beta * c.f_light * c.f_camera * camera[t - 1].beta * c.g;
+                assert!((l - c.l).abs().max_element() <= 1e-6 * c.l.max_element(), "{l} vs {}", c.l);
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 100, "only {checked} connections checked");
+}
