@@ -52,9 +52,10 @@ fn main() -> anyhow::Result<()> {
         reference.stats.seconds
     );
     let budget = Budget::Time(Duration::from_secs_f64(seconds));
-    for (name, integrator) in
-        [("path", &PathIntegrator::new(depth) as &dyn Integrator), ("bdpt", &BdptIntegrator::new(depth) as &dyn Integrator)]
-    {
+    for (name, integrator) in [
+        ("path", &PathIntegrator::new(depth) as &dyn Integrator),
+        ("bdpt", &BdptIntegrator::new(depth) as &dyn Integrator),
+    ] {
         for seed in 1..=2 {
             let out = render(integrator, budget, seed);
             let spp = out.stats.pixel_samples as f64 / f64::from(scene.film.width * scene.film.height);

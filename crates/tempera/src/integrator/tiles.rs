@@ -36,14 +36,8 @@ pub trait PixelEstimator: Sync {
 struct TileResult {
     buffer: TileBuffer,
     samples: u64,
-    stopped: bool,
-}
-
-/// What one rayon task accumulated over the tiles it rendered.
-struct TaskState {
-    tiles: Vec<(usize, TileResult)>,
-    splats: SplatBuffer,
     rays: u64,
+    stopped: bool,
 }
 
 struct Pass<'a> {
@@ -60,12 +54,12 @@ impl Pass<'_> {
         self.control.cancel.load(Ordering::Relaxed) || self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 
-    fn render_tile<E: PixelEstimator>(&self, estimator: &E, tile: Tile, state: &mut TaskState) -> TileResult {
+    fn render_tile<E: PixelEstimator>(&self, estimator: &E, tile: Tile, splats: &mut SplatBuffer) -> TileResult {
         let film = &self.scene.film;
         let camera: &Camera = &self.scene.camera;
         let mut buffer = TileBuffer::new(film, tile);
         let (mut samples, mut stopped) = (0u64, false);
-        let mut ctx = SampleCtx { rays: 0, splats: &mut state.splats };
+        let mut ctx = SampleCtx { rays: 0, splats };
         for y in tile.y0..tile.y1 {
             if self.should_stop() {
                 stopped = true;
@@ -88,8 +82,7 @@ impl Pass<'_> {
             }
             (self.control.on_progress)(u64::from(tile.x1 - tile.x0) * self.samples.len() as u64);
         }
-        state.rays += ctx.rays;
-        TileResult { buffer, samples, stopped }
+        TileResult { buffer, samples, rays: ctx.rays, stopped }
     }
 }
 
@@ -104,12 +97,13 @@ pub fn render_tiles<E: PixelEstimator>(
     let tiles = scene.film.tiles(TILE_SIZE);
     let mut film = Film::new(scene.film);
     let (sw, sh) = if E::SPLATS { (scene.film.width, scene.film.height) } else { (0, 0) };
-    let mut splats = SplatBuffer::new(sw, sh);
     let mut stats = RenderStats::default();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
         .build()
         .expect("a rayon thread pool can be created");
+    let thread_splats: Vec<std::sync::Mutex<SplatBuffer>> =
+        (0..pool.current_num_threads().max(1)).map(|_| std::sync::Mutex::new(SplatBuffer::new(sw, sh))).collect();
     let (max_spp, deadline) = match settings.budget {
         Budget::Samples(n) => (n, None),
         Budget::Time(d) => (u32::MAX, Some(start + d)),
@@ -127,37 +121,33 @@ pub fn render_tiles<E: PixelEstimator>(
         if control.cancel.load(Ordering::Relaxed) || pass.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        let tasks: Vec<TaskState> = pool.install(|| {
+        // One splat buffer per worker thread, locked once per tile (never per sample); the
+        // fixed-point sums make the merge order irrelevant.
+        let results: Vec<TileResult> = pool.install(|| {
             tiles
                 .par_iter()
-                .enumerate()
-                .fold(
-                    || TaskState { tiles: Vec::new(), splats: SplatBuffer::new(sw, sh), rays: 0 },
-                    |mut state, (i, &t)| {
-                        let r = pass.render_tile(estimator, t, &mut state);
-                        state.tiles.push((i, r));
-                        state
-                    },
-                )
+                .map(|&t| {
+                    let index = rayon::current_thread_index().unwrap_or(0) % thread_splats.len();
+                    let mut splats = thread_splats[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                    pass.render_tile(estimator, t, &mut splats)
+                })
                 .collect()
         });
-        let mut results: Vec<(usize, TileResult)> = Vec::with_capacity(tiles.len());
-        for task in tasks {
-            splats.merge(&task.splats);
-            stats.rays += task.rays;
-            results.extend(task.tiles);
-        }
-        results.sort_by_key(|(i, _)| *i);
         let mut stopped = false;
-        for (_, r) in &results {
+        for r in &results {
             film.merge(&r.buffer);
             stats.pixel_samples += r.samples;
+            stats.rays += r.rays;
             stopped |= r.stopped;
         }
         if stopped {
             break;
         }
         done += size;
+    }
+    let mut splats = SplatBuffer::new(sw, sh);
+    for buffer in thread_splats {
+        splats.merge(&buffer.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner));
     }
     stats.spp_completed = done;
     stats.invalid_samples = film.invalid_samples + splats.invalid;
