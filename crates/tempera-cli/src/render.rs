@@ -50,6 +50,9 @@ pub struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// BDPT: write one EXR per strategy (s, t) with its MIS-weighted contribution into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub strategy_images: Option<PathBuf>,
     /// Treat scene-loading warnings (unknown directives, unused parameters, approximations) as
     /// errors.
     #[arg(long)]
@@ -152,7 +155,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let outputs = outputs(&args, &scene);
     let max_depth = args.maxdepth.unwrap_or(scene.defaults.max_depth);
     let name = integrator_name(&args, &scene);
-    let integrator = integrator::create(&name, max_depth).with_context(|| format!("unknown integrator '{name}'"))?;
+    if args.strategy_images.is_some() && name != "bdpt" {
+        bail!("--strategy-images needs --integrator bdpt");
+    }
+    let options = integrator::IntegratorOptions { max_depth, strategy_images: args.strategy_images.is_some() };
+    let integrator = integrator::create(&name, &options).with_context(|| format!("unknown integrator '{name}'"))?;
     let budget = match args.time {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),
         None => Budget::Samples(args.spp.unwrap_or(scene.defaults.spp)),
@@ -173,6 +180,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let options = WriteOptions { exposure: args.exposure };
     for path in &outputs {
         write_image(path, &out.image, &options)?;
+    }
+    if let Some(dir) = &args.strategy_images {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        for (name, layer) in integrator.layer_names().iter().zip(&out.layers) {
+            write_image(&dir.join(format!("{name}.exr")), layer, &options)?;
+        }
     }
     if !args.quiet {
         summary(&args, &scene, integrator.name(), &out.stats, &outputs);

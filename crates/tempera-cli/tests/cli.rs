@@ -94,3 +94,20 @@ fn ctrl_c_stops_and_writes_the_image_so_far() {
     assert!(img.pixels.iter().filter(|p| p.max_element() > 0.0).count() > 2000, "the partial image is kept");
     assert!(img.pixels.iter().all(|p| p.is_finite()));
 }
+
+#[test]
+fn bdpt_writes_strategy_images() {
+    let dir = scratch("strategies");
+    let out = tempera()
+        .current_dir(&dir)
+        .args(["render", "--integrator", "bdpt", "--spp", "2", "--maxdepth", "2", "--resolution", "16x16", "--quiet"])
+        .args(["-o", "img.exr", "--strategy-images", "strategies"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    for name in ["s0_t2", "s0_t3", "s1_t2", "s2_t1", "s0_t4", "s1_t3", "s2_t2", "s3_t1"] {
+        assert!(dir.join("strategies").join(format!("{name}.exr")).is_file(), "{name}");
+    }
+    assert!(!dir.join("strategies/s1_t1.exr").exists());
+    assert_clean_error(&["render", "--strategy-images", "x"], "--strategy-images needs --integrator bdpt");
+}

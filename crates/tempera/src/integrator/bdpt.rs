@@ -32,11 +32,35 @@ pub struct BdptIntegrator {
     pub max_depth: u32,
     pub heuristic: Heuristic,
     pub strategies: Strategies,
+    /// Also accumulate one image per strategy `(s, t)` with its weighted contribution (what
+    /// pbrt calls `visualizestrategies`).
+    pub strategy_images: bool,
+}
+
+/// Every strategy `(s, t)` up to `max_depth`, in the order of the strategy images.
+pub fn strategy_list(max_depth: u32) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    for depth in 0..=max_depth as usize {
+        for s in 0..=depth + 1 {
+            let t = depth + 2 - s;
+            if !(s == 1 && t == 1) {
+                out.push((s, t));
+            }
+        }
+    }
+    out
+}
+
+fn strategy_index(s: usize, t: usize) -> usize {
+    // Depth d = s + t - 2 contributes d + 2 strategies (s = 0 … d + 1), minus (1, 1) at d = 0.
+    let d = s + t - 2;
+    let before: usize = (0..d).map(|k| k + 2).sum::<usize>() - usize::from(d > 0);
+    before + s
 }
 
 impl BdptIntegrator {
     pub fn new(max_depth: u32) -> Self {
-        Self { max_depth, heuristic: Heuristic::Power, strategies: Strategies::All }
+        Self { max_depth, heuristic: Heuristic::Power, strategies: Strategies::All, strategy_images: false }
     }
 
     fn included(&self, s: usize, t: usize) -> bool {
@@ -57,6 +81,10 @@ thread_local! {
 impl PixelEstimator for BdptIntegrator {
     const SPLATS: bool = true;
 
+    fn layers(&self) -> usize {
+        if self.strategy_images { strategy_list(self.max_depth).len() } else { 0 }
+    }
+
     fn li<S: Sampler>(&self, scene: &Scene, ray: Ray, sampler: &mut S, ctx: &mut SampleCtx) -> Rgb {
         PATHS.with_borrow_mut(|(camera, light)| {
             camera_subpath(scene, ray, sampler, self.max_depth, camera, &mut ctx.rays);
@@ -74,9 +102,18 @@ impl PixelEstimator for BdptIntegrator {
                     };
                     let w = if self.strategies == Strategies::All { c.weight } else { 1.0 };
                     let v = c.l * w;
-                    match (t, c.raster) {
-                        (1, Some(raster)) => ctx.splats.add(raster, v),
-                        _ => l += v,
+                    let raster = match (t, c.raster) {
+                        (1, Some(raster)) => {
+                            ctx.splats.add(raster, v);
+                            raster
+                        }
+                        _ => {
+                            l += v;
+                            ctx.raster
+                        }
+                    };
+                    if self.strategy_images {
+                        ctx.layers[strategy_index(s, t)].add(raster, v);
                     }
                 }
             }
@@ -90,7 +127,29 @@ impl Integrator for BdptIntegrator {
         "bdpt"
     }
 
+    fn layer_names(&self) -> Vec<String> {
+        if !self.strategy_images {
+            return Vec::new();
+        }
+        strategy_list(self.max_depth).into_iter().map(|(s, t)| format!("s{s}_t{t}")).collect()
+    }
+
     fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
         render_tiles(self, scene, settings, control)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strategy_indices_follow_the_list() {
+        for max_depth in 0..6 {
+            for (i, (s, t)) in strategy_list(max_depth).into_iter().enumerate() {
+                assert_eq!(strategy_index(s, t), i, "({s}, {t})");
+            }
+        }
+        assert_eq!(strategy_list(1), vec![(0, 2), (0, 3), (1, 2), (2, 1)]);
     }
 }

@@ -57,23 +57,38 @@ pub struct RenderStats {
 pub struct RenderOutput {
     pub image: Image,
     pub stats: RenderStats,
+    /// Extra images an integrator produces on request (BDPT's per-strategy images), with names.
+    pub layers: Vec<Image>,
 }
 
 /// A light-transport algorithm.
 pub trait Integrator: Send + Sync {
     fn name(&self) -> &'static str;
+    /// Names of the extra layers in [`RenderOutput::layers`], in order.
+    fn layer_names(&self) -> Vec<String> {
+        Vec::new()
+    }
     fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput;
 }
 
 /// Names accepted by [`create`].
 pub const INTEGRATORS: &[&str] = &["path", "bdpt"];
 
-/// The integrator called `name`, with maximum path depth `max_depth` (pbrt's meaning: the number
-/// of scattering events).
-pub fn create(name: &str, max_depth: u32) -> Option<Box<dyn Integrator>> {
+/// Options shared by the integrators [`create`] makes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct IntegratorOptions {
+    /// Maximum number of scattering events per path (pbrt's `maxdepth`).
+    pub max_depth: u32,
+    /// BDPT: also produce one image per strategy.
+    pub strategy_images: bool,
+}
+
+/// The integrator called `name`.
+pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integrator>> {
+    let d = options.max_depth;
     match name {
-        "path" => Some(Box::new(PathIntegrator::new(max_depth))),
-        "bdpt" => Some(Box::new(BdptIntegrator::new(max_depth))),
+        "path" => Some(Box::new(PathIntegrator::new(d))),
+        "bdpt" => Some(Box::new(BdptIntegrator { strategy_images: options.strategy_images, ..BdptIntegrator::new(d) })),
         _ => None,
     }
 }

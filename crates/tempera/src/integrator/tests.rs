@@ -283,3 +283,20 @@ fn bdpt_is_bit_identical_at_any_thread_count() {
         "splats must merge deterministically"
     );
 }
+
+#[test]
+fn strategy_images_sum_to_the_bdpt_image() {
+    let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
+    let integrator = BdptIntegrator { strategy_images: true, ..BdptIntegrator::new(3) };
+    let out = render_with(&scene, &integrator, Budget::Samples(8), 4, 0);
+    let names = integrator.layer_names();
+    assert_eq!(names.len(), out.layers.len());
+    assert_eq!(names.len(), 2 + 3 + 4 + 5 - 1);
+    assert!(names.contains(&"s2_t1".to_owned()) && names.contains(&"s0_t5".to_owned()));
+    for (i, p) in out.image.pixels.iter().enumerate() {
+        let sum: Rgb = out.layers.iter().map(|l| l.pixels[i]).sum();
+        assert!((sum - *p).abs().max_element() <= 1e-4 * p.max_element().max(1.0), "pixel {i}: {sum} vs {p}");
+    }
+    let light_tracing = &out.layers[names.iter().position(|n| n == "s2_t1").unwrap()];
+    assert!(light_tracing.pixels.iter().any(|p| p.max_element() > 0.0), "light tracing contributes");
+}

@@ -18,17 +18,31 @@ use std::time::Instant;
 
 const TILE_SIZE: u32 = 16;
 
-/// Per-thread state a sample may use: ray counting and a splat buffer.
+/// Per-thread state a sample may use: ray counting, a splat buffer and extra image layers.
 pub struct SampleCtx<'a> {
     pub rays: u64,
+    /// Raster position of the sample's camera ray.
+    pub raster: Vec2,
     /// Contributions to other pixels; scaled by 1/spp when the image is developed.
     pub splats: &'a mut SplatBuffer,
+    /// Extra images (for example one per BDPT strategy), developed like the splats.
+    pub layers: &'a mut [SplatBuffer],
+}
+
+/// A worker thread's splat buffer and extra layers.
+struct ThreadBuffers {
+    splats: SplatBuffer,
+    layers: Vec<SplatBuffer>,
 }
 
 /// Estimates the radiance arriving along a camera ray.
 pub trait PixelEstimator: Sync {
     /// True when the estimator splats onto other pixels (a full-size splat buffer per thread).
     const SPLATS: bool = false;
+    /// Number of extra image layers the estimator fills (each a full-size buffer per thread).
+    fn layers(&self) -> usize {
+        0
+    }
     /// Radiance along `ray` through raster position `raster`.
     fn li<S: Sampler>(&self, scene: &Scene, ray: Ray, sampler: &mut S, ctx: &mut SampleCtx) -> Rgb;
 }
@@ -54,12 +68,13 @@ impl Pass<'_> {
         self.control.cancel.load(Ordering::Relaxed) || self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 
-    fn render_tile<E: PixelEstimator>(&self, estimator: &E, tile: Tile, splats: &mut SplatBuffer) -> TileResult {
+    fn render_tile<E: PixelEstimator>(&self, estimator: &E, tile: Tile, buffers: &mut ThreadBuffers) -> TileResult {
         let film = &self.scene.film;
         let camera: &Camera = &self.scene.camera;
         let mut buffer = TileBuffer::new(film, tile);
         let (mut samples, mut stopped) = (0u64, false);
-        let mut ctx = SampleCtx { rays: 0, splats };
+        let ThreadBuffers { splats, layers } = buffers;
+        let mut ctx = SampleCtx { rays: 0, raster: Vec2::ZERO, splats, layers };
         for y in tile.y0..tile.y1 {
             if self.should_stop() {
                 stopped = true;
@@ -75,6 +90,7 @@ impl Pass<'_> {
                     let raster = Vec2::new(x as f32 + film_u.x, y as f32 + film_u.y);
                     let ray = camera.generate_ray(raster, lens_u);
                     ctx.rays += 1;
+                    ctx.raster = raster;
                     let l = estimator.li(self.scene, ray, &mut sampler, &mut ctx);
                     buffer.add_sample(raster, l);
                     samples += 1;
@@ -102,8 +118,14 @@ pub fn render_tiles<E: PixelEstimator>(
         .num_threads(settings.threads)
         .build()
         .expect("a rayon thread pool can be created");
-    let thread_splats: Vec<std::sync::Mutex<SplatBuffer>> =
-        (0..pool.current_num_threads().max(1)).map(|_| std::sync::Mutex::new(SplatBuffer::new(sw, sh))).collect();
+    let layer_count = estimator.layers();
+    let (fw, fh) = (scene.film.width, scene.film.height);
+    let thread_buffers: Vec<std::sync::Mutex<ThreadBuffers>> = (0..pool.current_num_threads().max(1))
+        .map(|_| {
+            let layers = (0..layer_count).map(|_| SplatBuffer::new(fw, fh)).collect();
+            std::sync::Mutex::new(ThreadBuffers { splats: SplatBuffer::new(sw, sh), layers })
+        })
+        .collect();
     let (max_spp, deadline) = match settings.budget {
         Budget::Samples(n) => (n, None),
         Budget::Time(d) => (u32::MAX, Some(start + d)),
@@ -127,9 +149,9 @@ pub fn render_tiles<E: PixelEstimator>(
             tiles
                 .par_iter()
                 .map(|&t| {
-                    let index = rayon::current_thread_index().unwrap_or(0) % thread_splats.len();
-                    let mut splats = thread_splats[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-                    pass.render_tile(estimator, t, &mut splats)
+                    let index = rayon::current_thread_index().unwrap_or(0) % thread_buffers.len();
+                    let mut buffers = thread_buffers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                    pass.render_tile(estimator, t, &mut buffers)
                 })
                 .collect()
         });
@@ -146,21 +168,27 @@ pub fn render_tiles<E: PixelEstimator>(
         done += size;
     }
     let mut splats = SplatBuffer::new(sw, sh);
-    for buffer in thread_splats {
-        splats.merge(&buffer.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner));
+    let mut layers: Vec<SplatBuffer> = (0..layer_count).map(|_| SplatBuffer::new(fw, fh)).collect();
+    for buffers in thread_buffers {
+        let buffers = buffers.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+        splats.merge(&buffers.splats);
+        for (total, layer) in layers.iter_mut().zip(&buffers.layers) {
+            total.merge(layer);
+        }
     }
     stats.spp_completed = done;
     stats.invalid_samples = film.invalid_samples + splats.invalid;
     stats.cancelled = control.cancel.load(Ordering::Relaxed);
     stats.seconds = start.elapsed().as_secs_f64();
     let mut image = film.develop();
+    // Splats estimate the image per sample: divide by the samples per pixel.
+    let per_sample = f64::from(fw) * f64::from(fh) / (stats.pixel_samples.max(1) as f64);
     if E::SPLATS && stats.pixel_samples > 0 {
-        // Splats estimate the image per sample: divide by the samples per pixel.
-        let pixels = f64::from(scene.film.width) * f64::from(scene.film.height);
-        let splat = splats.image(pixels / stats.pixel_samples as f64);
+        let splat = splats.image(per_sample);
         for (p, s) in image.pixels.iter_mut().zip(&splat.pixels) {
             *p += *s;
         }
     }
-    RenderOutput { image, stats }
+    let layers = layers.iter().map(|l| l.image(per_sample)).collect();
+    RenderOutput { image, stats, layers }
 }
