@@ -9,6 +9,7 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+use tempera::bidir::Heuristic;
 use tempera::integrator::{self, Budget, RenderControl, RenderSettings};
 use tempera::scene::Scene;
 use tempera_image::{WriteOptions, write_image};
@@ -50,6 +51,9 @@ pub struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// BDPT: multiple importance sampling heuristic.
+    #[arg(long, default_value = "power", value_parser = ["power", "balance"])]
+    pub mis: String,
     /// BDPT: write one EXR per strategy (s, t) with its MIS-weighted contribution into DIR.
     #[arg(long, value_name = "DIR")]
     pub strategy_images: Option<PathBuf>,
@@ -158,7 +162,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if args.strategy_images.is_some() && name != "bdpt" {
         bail!("--strategy-images needs --integrator bdpt");
     }
-    let options = integrator::IntegratorOptions { max_depth, strategy_images: args.strategy_images.is_some() };
+    let heuristic = if args.mis == "balance" { Heuristic::Balance } else { Heuristic::Power };
+    let options =
+        integrator::IntegratorOptions { max_depth, strategy_images: args.strategy_images.is_some(), heuristic };
     let integrator = integrator::create(&name, &options).with_context(|| format!("unknown integrator '{name}'"))?;
     let budget = match args.time {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),

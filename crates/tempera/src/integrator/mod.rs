@@ -81,6 +81,8 @@ pub struct IntegratorOptions {
     pub max_depth: u32,
     /// BDPT: also produce one image per strategy.
     pub strategy_images: bool,
+    /// BDPT: the MIS heuristic.
+    pub heuristic: crate::bidir::Heuristic,
 }
 
 /// The integrator called `name`.
@@ -88,7 +90,11 @@ pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integra
     let d = options.max_depth;
     match name {
         "path" => Some(Box::new(PathIntegrator::new(d))),
-        "bdpt" => Some(Box::new(BdptIntegrator { strategy_images: options.strategy_images, ..BdptIntegrator::new(d) })),
+        "bdpt" => Some(Box::new(BdptIntegrator {
+            strategy_images: options.strategy_images,
+            heuristic: options.heuristic,
+            ..BdptIntegrator::new(d)
+        })),
         _ => None,
     }
 }
