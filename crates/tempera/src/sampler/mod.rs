@@ -4,8 +4,10 @@
 //! that a sampler can keep the camera, light and connection dimensions apart.
 
 pub mod independent;
+pub mod pss;
 
 pub use independent::IndependentSampler;
+pub use pss::PssSampler;
 
 use crate::math::Vec2;
 

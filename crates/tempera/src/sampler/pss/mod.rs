@@ -1,0 +1,186 @@
+//! The primary-sample-space sampler of Kelemen et al. 2002 ("A Simple and Robust Mutation
+//! Strategy for the Metropolis Light Transport Algorithm") with lazy mutation, as in pbrt-v4
+//! §13.4.1: a state of uniforms grown on demand, each entry with its value, the iteration that
+//! last modified it, and a backup for rejection. Small steps perturb by a wrapped Gaussian of
+//! width `sigma`, applied lazily as `sigma·√n` for the `n` iterations an entry was skipped; large
+//! steps draw fresh uniforms. Three streams (camera, light, connection) are interleaved by index
+//! (`stream + 3·i`) and restart at their first entry, so a change of technique does not shift
+//! another stream's numbers. An entry first touched after the chain started is drawn as a fresh
+//! uniform (the stationary distribution of an unused component), and forgotten again if the
+//! proposal that drew it is rejected.
+
+use super::{Sampler, Stream};
+use crate::math::rng::Pcg32;
+use std::f32::consts::SQRT_2;
+
+const STREAMS: usize = 3;
+/// Stamp of an entry no state has used yet.
+const UNTOUCHED: u64 = u64::MAX;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Entry {
+    value: f32,
+    modified: u64,
+    backup_value: f32,
+    backup_modified: u64,
+}
+
+impl Entry {
+    const NEW: Entry = Entry { value: 0.0, modified: UNTOUCHED, backup_value: 0.0, backup_modified: UNTOUCHED };
+}
+
+/// Inverse error function (Giles 2012, "Approximating the erfinv function", single precision).
+fn erf_inv(x: f32) -> f32 {
+    let x = x.clamp(-0.999_999, 0.999_999);
+    let mut w = -((1.0 - x) * (1.0 + x)).ln();
+    let p = if w < 5.0 {
+        w -= 2.5;
+        let mut p = 2.810_226_36e-08;
+        for c in [
+            3.432_739_39e-07,
+            -3.523_387_7e-06,
+            -4.391_506_54e-06,
+            0.000_218_580_87,
+            -0.001_253_725_03,
+            -0.004_177_681_64,
+            0.246_640_727,
+            1.501_409_41,
+        ] {
+            p = c + p * w;
+        }
+        p
+    } else {
+        w = w.sqrt() - 3.0;
+        let mut p = -0.000_200_214_257;
+        for c in [
+            0.000_100_950_558,
+            0.001_349_343_22,
+            -0.003_673_428_44,
+            0.005_739_507_73,
+            -0.007_622_461_3,
+            0.009_438_870_47,
+            1.001_674_06,
+            2.832_976_82,
+        ] {
+            p = c + p * w;
+        }
+        p
+    };
+    p * x
+}
+
+/// A Markov chain's position in primary sample space.
+#[derive(Clone, Debug)]
+pub struct PssSampler {
+    rng: Pcg32,
+    entries: Vec<Entry>,
+    sigma: f32,
+    large_step_probability: f32,
+    iteration: u64,
+    last_large_step: u64,
+    large_step: bool,
+    stream: usize,
+    stream_index: usize,
+}
+
+impl PssSampler {
+    /// A chain seeded from `(seed, chain)`. Its first iteration is a large step, so the first
+    /// evaluated state consists of independent uniforms.
+    pub fn new(seed: u64, chain: u64, sigma: f32, large_step_probability: f32) -> Self {
+        Self {
+            rng: Pcg32::new(crate::math::rng::hash(&[seed, chain]), crate::math::rng::hash(&[chain, 0x5ca1ab1e])),
+            entries: Vec::new(),
+            sigma,
+            large_step_probability,
+            iteration: 0,
+            last_large_step: 0,
+            large_step: true,
+            stream: 0,
+            stream_index: 0,
+        }
+    }
+
+    /// Begins a proposal: decides between a large and a small step.
+    pub fn start_iteration(&mut self) {
+        self.iteration += 1;
+        self.large_step = self.rng.next_f32() < self.large_step_probability;
+    }
+
+    pub fn is_large_step(&self) -> bool {
+        self.large_step
+    }
+
+    /// Keeps the proposal as the chain's new state.
+    pub fn accept(&mut self) {
+        if self.large_step {
+            self.last_large_step = self.iteration;
+        }
+    }
+
+    /// Discards the proposal: every entry it modified gets its value and stamp back.
+    pub fn reject(&mut self) {
+        for e in &mut self.entries {
+            if e.modified == self.iteration {
+                e.value = e.backup_value;
+                e.modified = e.backup_modified;
+            }
+        }
+        self.iteration -= 1;
+    }
+
+    fn ensure_ready(&mut self, index: usize) {
+        if index >= self.entries.len() {
+            self.entries.resize(index + 1, Entry::NEW);
+        }
+        let (iteration, last_large, large) = (self.iteration, self.last_large_step, self.large_step);
+        let e = &mut self.entries[index];
+        if e.modified == iteration {
+            return;
+        }
+        e.backup_value = e.value;
+        e.backup_modified = e.modified;
+        if e.modified == UNTOUCHED || large {
+            e.value = self.rng.next_f32();
+        } else {
+            // Entries not touched since the last accepted large step were replaced by it.
+            if e.modified < last_large {
+                e.value = self.rng.next_f32();
+                e.modified = last_large;
+            }
+            let skipped = (iteration - e.modified) as f32;
+            let normal = SQRT_2 * erf_inv(2.0 * self.rng.next_f32() - 1.0);
+            e.value += normal * self.sigma * skipped.sqrt();
+            e.value -= e.value.floor();
+            if e.value >= 1.0 {
+                e.value = 0.0;
+            }
+        }
+        e.modified = iteration;
+    }
+
+    /// The number of primary-sample-space dimensions touched so far.
+    pub fn dimensions(&self) -> usize {
+        self.entries.len()
+    }
+}
+
+impl Sampler for PssSampler {
+    fn start_stream(&mut self, stream: Stream) {
+        self.stream = match stream {
+            Stream::Camera => 0,
+            Stream::Light => 1,
+            Stream::Connection => 2,
+        };
+        self.stream_index = 0;
+    }
+
+    fn next_1d(&mut self) -> f32 {
+        let index = self.stream + STREAMS * self.stream_index;
+        self.stream_index += 1;
+        self.ensure_ready(index);
+        self.entries[index].value
+    }
+}
+
+#[cfg(test)]
+mod tests;
