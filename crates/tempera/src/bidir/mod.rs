@@ -11,5 +11,5 @@ mod tests;
 
 pub use connect::{Connection, Subpaths, connect};
 pub use mis::{Heuristic, ReversePdfs, mis_weight, mis_weight_with, reverse_pdfs};
-pub use subpath::{camera_subpath, light_subpath};
+pub use subpath::{camera_subpath, camera_subpath_vertices, light_subpath, light_subpath_vertices};
 pub use vertex::{Vertex, VertexKind};

@@ -1,6 +1,7 @@
 //! Camera and light subpaths by random walks (Veach 1997 §10.2; pbrt-v4 §13.3.3), generic over
 //! the sampler so that BDPT and the primary-sample-space MCMC integrators share them. The camera
-//! subpath reads [`Stream::Camera`], the light subpath [`Stream::Light`].
+//! subpath continues the camera stream its caller started (after the film and lens samples); the
+//! light subpath starts [`Stream::Light`].
 
 use super::vertex::{Vertex, VertexKind, infinite_light_density, scene_sphere};
 use crate::bsdf::TransportMode;
@@ -93,6 +94,7 @@ fn shading_normal_correction(
 }
 
 /// The camera subpath through `ray` (at most `max_depth + 2` vertices, the camera included).
+/// Numbers continue the camera stream the caller started (after the film and lens samples).
 pub fn camera_subpath<S: Sampler>(
     scene: &Scene,
     ray: Ray,
@@ -101,17 +103,32 @@ pub fn camera_subpath<S: Sampler>(
     path: &mut Vec<Vertex>,
     rays: &mut u64,
 ) {
+    camera_subpath_vertices(scene, ray, sampler, max_depth as usize + 2, path, rays);
+}
+
+/// A camera subpath of at most `vertices` vertices (the camera included).
+pub fn camera_subpath_vertices<S: Sampler>(
+    scene: &Scene,
+    ray: Ray,
+    sampler: &mut S,
+    vertices: usize,
+    path: &mut Vec<Vertex>,
+    rays: &mut u64,
+) {
     path.clear();
-    sampler.start_stream(Stream::Camera);
+    if vertices == 0 {
+        return;
+    }
     let (_, pdf_dir) = scene.camera.pdf_we(&ray);
     path.push(Vertex::camera(ray.o, Rgb::ONE));
-    if pdf_dir > 0.0 {
-        let walk = Walk { beta: Rgb::ONE, pdf_dir, bounces: max_depth as usize + 1, mode: TransportMode::Radiance };
+    if pdf_dir > 0.0 && vertices > 1 {
+        let walk = Walk { beta: Rgb::ONE, pdf_dir, bounces: vertices - 1, mode: TransportMode::Radiance };
         random_walk(scene, ray, sampler, walk, path, rays);
     }
 }
 
-/// A light subpath (at most `max_depth + 1` vertices, the light included).
+/// A light subpath (at most `max_depth + 1` vertices, the light included), from the light
+/// stream.
 pub fn light_subpath<S: Sampler>(
     scene: &Scene,
     sampler: &mut S,
@@ -119,7 +136,21 @@ pub fn light_subpath<S: Sampler>(
     path: &mut Vec<Vertex>,
     rays: &mut u64,
 ) {
+    light_subpath_vertices(scene, sampler, max_depth as usize + 1, path, rays);
+}
+
+/// A light subpath of at most `vertices` vertices (the light included), from the light stream.
+pub fn light_subpath_vertices<S: Sampler>(
+    scene: &Scene,
+    sampler: &mut S,
+    vertices: usize,
+    path: &mut Vec<Vertex>,
+    rays: &mut u64,
+) {
     path.clear();
+    if vertices == 0 {
+        return;
+    }
     sampler.start_stream(Stream::Light);
     let u_light = sampler.next_1d();
     let u_pos = sampler.next_2d();
@@ -142,7 +173,7 @@ pub fn light_subpath<S: Sampler>(
     path.push(v0);
     let cos = if e.n == crate::math::Vec3::ZERO || infinite { 1.0 } else { e.n.dot(e.ray.d).abs() };
     let beta = e.le * (cos / (pmf * e.pdf_pos * e.pdf_dir));
-    let walk = Walk { beta, pdf_dir: e.pdf_dir, bounces: max_depth as usize, mode: TransportMode::Importance };
+    let walk = Walk { beta, pdf_dir: e.pdf_dir, bounces: vertices - 1, mode: TransportMode::Importance };
     random_walk(scene, e.ray, sampler, walk, path, rays);
     // Positions on the emitting disk of an infinite light are planar: the first surface vertex's
     // density is the disk's, projected (pbrt-v4 §13.3.3).
