@@ -26,6 +26,18 @@ pub struct RenderArgs {
     /// Samples per pixel (default: the scene's).
     #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
+    /// MCMC integrators: mutations per pixel (deterministic for a seed at any thread count).
+    #[arg(long, conflicts_with_all = ["spp", "time"], value_parser = clap::value_parser!(u32).range(1..))]
+    pub mpp: Option<u32>,
+    /// MMLT: bootstrap samples per path depth.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    pub bootstrap: Option<u64>,
+    /// MMLT: independent chains per path depth.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub chains: Option<u64>,
+    /// MMLT: probability of a large step.
+    #[arg(long, value_parser = parse_probability)]
+    pub large_step: Option<f32>,
     /// Render for this many seconds instead of a fixed sample count.
     #[arg(long, value_parser = parse_seconds, allow_hyphen_values = true)]
     pub time: Option<f64>,
@@ -67,6 +79,13 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err(format!("expected a positive number of seconds, got '{s}'")),
+    }
+}
+
+fn parse_probability(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
+        _ => Err(format!("expected a probability in (0, 1], got '{s}'")),
     }
 }
 
@@ -163,12 +182,18 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bail!("--strategy-images needs --integrator bdpt");
     }
     let heuristic = if args.mis == "balance" { Heuristic::Balance } else { Heuristic::Power };
-    let options =
-        integrator::IntegratorOptions { max_depth, strategy_images: args.strategy_images.is_some(), heuristic };
+    let options = integrator::IntegratorOptions {
+        max_depth,
+        strategy_images: args.strategy_images.is_some(),
+        heuristic,
+        bootstrap: args.bootstrap.unwrap_or(0) as usize,
+        chains: args.chains.unwrap_or(0) as usize,
+        large_step: args.large_step.unwrap_or(0.0),
+    };
     let integrator = integrator::create(&name, &options).with_context(|| format!("unknown integrator '{name}'"))?;
     let budget = match args.time {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),
-        None => Budget::Samples(args.spp.unwrap_or(scene.defaults.spp)),
+        None => Budget::Samples(args.mpp.or(args.spp).unwrap_or(scene.defaults.spp)),
     };
     let settings = RenderSettings { budget, seed: args.seed, threads: args.threads };
     let pixels = u64::from(scene.film.width) * u64::from(scene.film.height);
@@ -180,7 +205,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     install_interrupt_handler();
     let control = RenderControl { cancel: &CANCEL, on_progress: &on_progress };
-    let out = integrator.render(&scene, &settings, &control);
+    let out = integrator.try_render(&scene, &settings, &control).map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
 
     let options = WriteOptions { exposure: args.exposure };

@@ -111,3 +111,32 @@ fn bdpt_writes_strategy_images() {
     assert!(!dir.join("strategies/s1_t1.exr").exists());
     assert_clean_error(&["render", "--strategy-images", "x"], "--strategy-images needs --integrator bdpt");
 }
+
+#[test]
+fn mmlt_renders_with_a_mutation_budget() {
+    let dir = scratch("mmlt");
+    let out = tempera()
+        .current_dir(&dir)
+        .args([
+            "render",
+            "--integrator",
+            "mmlt",
+            "--mpp",
+            "4",
+            "--bootstrap",
+            "2000",
+            "--chains",
+            "8",
+            "--resolution",
+            "16x16",
+            "-o",
+            "m.exr",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let img = tempera_image::read_image(&dir.join("m.exr"), tempera_image::ColorEncoding::Linear).unwrap();
+    assert!(img.pixels.iter().any(|p| p.max_element() > 0.0));
+    assert_clean_error(&["render", "--integrator", "mmlt", "--large-step", "2"], "probability");
+    assert_clean_error(&["render", "--mpp", "4", "--spp", "4"], "cannot be used with");
+}

@@ -7,6 +7,7 @@ pub mod bidir;
 pub mod bsdf;
 pub mod geometry;
 pub mod math;
+pub mod mcmc;
 pub mod texture;
 
 pub mod camera;

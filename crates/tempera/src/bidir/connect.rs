@@ -80,6 +80,10 @@ pub fn connect<S: Sampler>(
     rays: &mut u64,
 ) -> Option<Connection> {
     let Subpaths { light, camera } = paths;
+    // (1, 1) would see the light directly through light tracing: never a strategy here.
+    if (s == 1 && t == 1) || t == 0 || (s > 1 && light.len() < s) || (t > 1 && camera.len() < t) || (s == 0 && t < 2) {
+        return None;
+    }
     if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::Light {
         return None;
     }

@@ -40,8 +40,8 @@ struct Endpoints {
 
 fn endpoints(light: &[Vertex], camera: &[Vertex], sampled: Option<&Vertex>, s: usize, t: usize) -> Endpoints {
     Endpoints {
-        qs: (s > 0).then(|| if s == 1 { sampled.copied().unwrap_or(light[0]) } else { light[s - 1] }),
-        pt: (t > 0).then(|| if t == 1 { sampled.copied().unwrap_or(camera[0]) } else { camera[t - 1] }),
+        qs: (s > 0).then(|| if s == 1 { sampled.copied().unwrap_or_else(|| light[0]) } else { light[s - 1] }),
+        pt: (t > 0).then(|| if t == 1 { sampled.copied().unwrap_or_else(|| camera[0]) } else { camera[t - 1] }),
         qs_minus: (s > 1).then(|| light[s - 2]),
         pt_minus: (t > 1).then(|| camera[t - 2]),
     }

@@ -3,6 +3,7 @@
 //! driver in [`tiles`].
 
 pub mod bdpt;
+pub mod mmlt;
 pub mod path;
 pub mod tiles;
 
@@ -10,6 +11,7 @@ pub mod tiles;
 mod tests;
 
 pub use bdpt::{BdptIntegrator, Strategies};
+pub use mmlt::{MmltIntegrator, MmltReport};
 pub use path::PathIntegrator;
 
 use crate::scene::Scene;
@@ -69,10 +71,20 @@ pub trait Integrator: Send + Sync {
         Vec::new()
     }
     fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput;
+    /// Like [`Self::render`], but reports why a render could not be made (for example an MCMC
+    /// bootstrap in which no light path reaches the camera).
+    fn try_render(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> Result<RenderOutput, String> {
+        Ok(self.render(scene, settings, control))
+    }
 }
 
 /// Names accepted by [`create`].
-pub const INTEGRATORS: &[&str] = &["path", "bdpt"];
+pub const INTEGRATORS: &[&str] = &["path", "bdpt", "mmlt"];
 
 /// Options shared by the integrators [`create`] makes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -83,6 +95,11 @@ pub struct IntegratorOptions {
     pub strategy_images: bool,
     /// BDPT: the MIS heuristic.
     pub heuristic: crate::bidir::Heuristic,
+    /// MMLT: bootstrap samples per depth, chains per depth and large-step probability (0 keeps
+    /// the integrator's defaults).
+    pub bootstrap: usize,
+    pub chains: usize,
+    pub large_step: f32,
 }
 
 /// The integrator called `name`.
@@ -90,6 +107,19 @@ pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integra
     let d = options.max_depth;
     match name {
         "path" => Some(Box::new(PathIntegrator::new(d))),
+        "mmlt" => {
+            let defaults = MmltIntegrator::new(d);
+            Some(Box::new(MmltIntegrator {
+                bootstrap: if options.bootstrap > 0 { options.bootstrap } else { defaults.bootstrap },
+                chains: if options.chains > 0 { options.chains } else { defaults.chains },
+                large_step_probability: if options.large_step > 0.0 {
+                    options.large_step
+                } else {
+                    defaults.large_step_probability
+                },
+                ..defaults
+            }))
+        }
         "bdpt" => Some(Box::new(BdptIntegrator {
             strategy_images: options.strategy_images,
             heuristic: options.heuristic,

@@ -300,3 +300,81 @@ fn strategy_images_sum_to_the_bdpt_image() {
     let light_tracing = &out.layers[names.iter().position(|n| n == "s2_t1").unwrap()];
     assert!(light_tracing.pixels.iter().any(|p| p.max_element() > 0.0), "light tracing contributes");
 }
+
+fn mmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> (RenderOutput, MmltReport) {
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let m = MmltIntegrator { bootstrap: 200_000, ..MmltIntegrator::new(5) };
+    m.render_with_report(scene, &RenderSettings { budget: Budget::Samples(mpp), seed, threads }, &control).unwrap()
+}
+
+#[test]
+fn mmlt_agrees_with_bdpt_on_a_cornell_box() {
+    let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
+    let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
+    let (mmlt, report) = mmlt_render(&scene, 2048, 2, 0);
+    let (a, b) = (block_stats(&mmlt.image, 16), block_stats(&bdpt.image, 16));
+    let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
+    assert!((mean(&a) / mean(&b) - 1.0).abs() < 0.01, "image means {} vs {}", mean(&a), mean(&b));
+    for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
+        assert!((ma - mb).abs() < 4.0 * sb + 0.03 * mb, "block {i}: mmlt {ma} vs bdpt {mb} ± {sb}");
+    }
+    assert!(report.depths.iter().all(|d| d.invalid == 0));
+    assert!(report.depths[1].b_rel_se < 0.02, "b_1 is pinned down: {:?}", report.depths[1]);
+}
+
+#[test]
+fn mmlt_passes_the_white_furnace() {
+    let scene = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
+    let (out, _) = mmlt_render(&scene, 512, 3, 0);
+    let (sphere, sky) = classify_furnace_pixels(&scene);
+    let mean = |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
+    assert!((mean(&sphere) - 0.8).abs() < 0.01, "sphere {}", mean(&sphere));
+    assert!((mean(&sky) - 1.0).abs() < 0.01, "sky {}", mean(&sky));
+}
+
+#[test]
+fn mmlt_is_bit_identical_at_any_thread_count() {
+    let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let m = MmltIntegrator { bootstrap: 5_000, chains: 8, ..MmltIntegrator::new(4) };
+    let run = |threads| {
+        m.render(&scene, &RenderSettings { budget: Budget::Samples(16), seed: 9, threads }, &control).image.pixels
+    };
+    let one = run(1);
+    assert!(one == run(2) && one == run(3));
+}
+
+#[test]
+fn mmlt_without_light_reaching_the_camera_is_a_clear_error() {
+    // A scene without any light.
+    let mut nothing = crate::scene::SceneBuilder::new();
+    let m = nothing.add_material(crate::material::Material::diffuse(Rgb::splat(0.5)));
+    nothing.add_shape(
+        crate::scenes::quad(
+            crate::math::Vec3::ZERO,
+            crate::math::Vec3::X,
+            crate::math::Vec3::ONE,
+            crate::math::Vec3::Y,
+        ),
+        m,
+        None,
+    );
+    nothing.set_camera(crate::camera::CameraDesc::look_at(
+        crate::math::Vec3::new(0.5, 0.5, 2.0),
+        crate::math::Vec3::splat(0.5),
+        crate::math::Vec3::Y,
+        40.0,
+    ));
+    nothing.set_film(crate::film::FilmDesc { width: 8, height: 8, ..Default::default() });
+    let scene = nothing.build().unwrap();
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let m = MmltIntegrator { bootstrap: 1000, ..MmltIntegrator::new(3) };
+    let err = m
+        .try_render(&scene, &RenderSettings { budget: Budget::Samples(4), seed: 1, threads: 0 }, &control)
+        .err()
+        .unwrap();
+    assert!(err.contains("no light path reaches the camera"), "{err}");
+}

@@ -1,0 +1,85 @@
+//! Markov-chain machinery shared by the MCMC integrators: evaluating a primary-sample-space
+//! state as one bidirectional strategy of a given path depth (the MMLT target of Hachisuka,
+//! Kaplanyan & Dachsbacher 2014), and the chain statistics.
+
+pub mod stats;
+
+pub use stats::DepthStats;
+
+use crate::bidir::{Heuristic, Subpaths, Vertex, camera_subpath_vertices, connect, light_subpath_vertices};
+use crate::math::{Rgb, Vec2, luminance};
+use crate::sampler::{PssSampler, Sampler, Stream};
+use crate::scene::Scene;
+
+/// A state's contribution: the radiance it adds and where on the film.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contribution {
+    /// `(k+2)·w·f/p`: the MIS-weighted strategy value times the number of strategies.
+    pub l: Rgb,
+    pub raster: Vec2,
+    /// The chain's target: luminance of `l`, or 0 for invalid values.
+    pub f: f32,
+    /// The technique `s` (light-subpath vertices) the state chose.
+    pub technique: usize,
+}
+
+impl Contribution {
+    pub const ZERO: Contribution = Contribution { l: Rgb::ZERO, raster: Vec2::ZERO, f: 0.0, technique: 0 };
+}
+
+/// Scratch space for subpaths.
+#[derive(Default)]
+pub struct Paths {
+    camera: Vec<Vertex>,
+    light: Vec<Vertex>,
+}
+
+/// Evaluates the state of `sampler` as a path of depth `k`: the first camera-stream number
+/// chooses the technique `s = min(⌊u·(k+2)⌋, k+1)` (depth 0 has the single technique (0, 2),
+/// as in pbrt-v4), the next two the film position. Returns the contribution and whether its
+/// value was invalid (NaN, infinite or negative).
+pub fn evaluate(
+    scene: &Scene,
+    k: usize,
+    sampler: &mut PssSampler,
+    paths: &mut Paths,
+    rays: &mut u64,
+) -> (Contribution, bool) {
+    sampler.start_stream(Stream::Camera);
+    let u = sampler.next_1d();
+    let n = if k == 0 { 1 } else { k + 2 };
+    let s = if k == 0 { 0 } else { ((u * n as f32) as usize).min(k + 1) };
+    let t = k + 2 - s;
+    let film = sampler.next_2d();
+    let lens = sampler.next_2d();
+    let (w, h) = (scene.film.width as f32, scene.film.height as f32);
+    let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
+    paths.camera.clear();
+    if t > 1 {
+        let ray = scene.camera.generate_ray(raster, lens);
+        *rays += 1;
+        camera_subpath_vertices(scene, ray, sampler, t, &mut paths.camera, rays);
+        if paths.camera.len() != t {
+            return (Contribution { technique: s, ..Contribution::ZERO }, false);
+        }
+    }
+    paths.light.clear();
+    if s > 1 {
+        light_subpath_vertices(scene, sampler, s, &mut paths.light, rays);
+        if paths.light.len() != s {
+            return (Contribution { technique: s, ..Contribution::ZERO }, false);
+        }
+    }
+    let subpaths = Subpaths { light: &paths.light, camera: &paths.camera };
+    let zero = Contribution { technique: s, ..Contribution::ZERO };
+    let Some(c) = connect(scene, subpaths, (s, t), sampler, Heuristic::Power, rays) else {
+        return (zero, false);
+    };
+    let l = c.l * (c.weight * n as f32);
+    let f = luminance(l);
+    if !l.is_finite() || !f.is_finite() || l.min_element() < 0.0 {
+        return (zero, true);
+    }
+    let raster = if t == 1 { c.raster.unwrap_or(raster) } else { raster };
+    (Contribution { l, raster, f: f.max(0.0), technique: s }, false)
+}
