@@ -53,6 +53,16 @@ fn sampler_for(seed: u64, k: usize, i: usize, m: &MmltIntegrator) -> PssSampler 
     PssSampler::new(bootstrap_seed(seed, k, i), k as u64, m.sigma, m.large_step_probability)
 }
 
+/// What every chain of a render shares.
+struct ChainContext<'a> {
+    scene: &'a Scene,
+    seed: u64,
+    /// Per depth, the bootstrap distribution that start states are drawn from.
+    starts: Vec<Distribution1D>,
+    deadline: Option<Instant>,
+    control: &'a RenderControl<'a>,
+}
+
 /// One chain's work.
 struct ChainJob {
     depth: usize,
@@ -97,18 +107,10 @@ impl MmltIntegrator {
         (Bootstrap { values, mean, sum2, invalid }, rays)
     }
 
-    /// Runs one chain, splatting `C/f`-weighted contributions into `splats[depth]`.
-    #[allow(clippy::too_many_arguments)]
-    fn run_chain(
-        &self,
-        scene: &Scene,
-        seed: u64,
-        job: &ChainJob,
-        starts: &Distribution1D,
-        deadline: Option<Instant>,
-        control: &RenderControl,
-        splats: &mut SplatBuffer,
-    ) -> ChainResult {
+    /// Runs one chain, splatting `C/f`-weighted contributions into `splats`.
+    fn run_chain(&self, ctx: &ChainContext, job: &ChainJob, splats: &mut SplatBuffer) -> ChainResult {
+        let ChainContext { scene, seed, deadline, control, .. } = *ctx;
+        let starts = &ctx.starts[job.depth];
         let k = job.depth;
         let start_time = Instant::now();
         let mut rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, job.index as u64]), 7);
@@ -202,7 +204,7 @@ impl MmltIntegrator {
             })
             .collect();
         let b_total: f64 = boots.iter().map(|b| b.mean).sum();
-        if !(b_total > 0.0) {
+        if b_total.is_nan() || b_total <= 0.0 {
             return Err("no light path reaches the camera (every bootstrap sample was zero)".into());
         }
         // Mutations per depth in proportion to b_k; a time budget sets a large cap and stops at
@@ -223,7 +225,13 @@ impl MmltIntegrator {
                 jobs.push(ChainJob { depth: k, index: c as usize, mutations });
             }
         }
-        let starts: Vec<Distribution1D> = boots.iter().map(|b| Distribution1D::new(&b.values)).collect();
+        let ctx = ChainContext {
+            scene,
+            seed,
+            starts: boots.iter().map(|b| Distribution1D::new(&b.values)).collect(),
+            deadline,
+            control,
+        };
         let threads = rayon::current_num_threads().max(1);
         let buffers: Vec<Mutex<Vec<SplatBuffer>>> =
             (0..threads).map(|_| Mutex::new((0..depths).map(|_| SplatBuffer::new(w, h)).collect())).collect();
@@ -232,7 +240,7 @@ impl MmltIntegrator {
             .map(|job| {
                 let index = rayon::current_thread_index().unwrap_or(0) % buffers.len();
                 let mut guard = buffers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-                self.run_chain(scene, seed, job, &starts[job.depth], deadline, control, &mut guard[job.depth])
+                self.run_chain(&ctx, job, &mut guard[job.depth])
             })
             .collect();
         // Merge statistics in job order; refine b_k with the large-step proposals.
