@@ -17,7 +17,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene (the embedded default scene when none is given).
-    Render(render::RenderArgs),
+    Render(Box<render::RenderArgs>),
     /// Describe what a scene file contains once loaded.
     Info(info::InfoArgs),
 }
@@ -25,7 +25,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => render::run(args),
+        Command::Render(args) => render::run(*args),
         Command::Info(args) => info::run(args),
     };
     match result {
