@@ -3,6 +3,7 @@
 mod info;
 mod render;
 mod scene;
+mod stats;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

@@ -63,6 +63,9 @@ pub struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Write render statistics (per-depth chain statistics for MCMC integrators) as JSON.
+    #[arg(long, value_name = "FILE.json")]
+    pub stats: Option<PathBuf>,
     /// BDPT: multiple importance sampling heuristic.
     #[arg(long, default_value = "power", value_parser = ["power", "balance"])]
     pub mis: String,
@@ -219,20 +222,32 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
     }
     if !args.quiet {
-        summary(&args, &scene, integrator.name(), &out.stats, &outputs);
+        summary(&args, &scene, integrator.name(), &out.stats, &outputs, !out.chains.is_empty());
+        crate::stats::print_table(&out);
+    }
+    if let Some(path) = &args.stats {
+        crate::stats::write(path, integrator.name(), &out)?;
     }
     Ok(())
 }
 
-fn summary(args: &RenderArgs, scene: &Scene, name: &str, s: &tempera::integrator::RenderStats, outputs: &[PathBuf]) {
+fn summary(
+    args: &RenderArgs,
+    scene: &Scene,
+    name: &str,
+    s: &tempera::integrator::RenderStats,
+    outputs: &[PathBuf],
+    mcmc: bool,
+) {
     let names: Vec<_> = outputs.iter().map(|p| p.display().to_string()).collect();
     let scene_name =
         args.scene.as_deref().map_or_else(|| "default scene".to_owned(), |p: &Path| p.display().to_string());
     let pixels = f64::from(scene.film.width) * f64::from(scene.film.height);
     let spp = s.pixel_samples as f64 / pixels;
     let status = if s.cancelled { "interrupted: " } else { "" };
+    let (per_pixel, per_second) = if mcmc { ("mutations/pixel", "Mmutations/s") } else { ("spp", "Msamples/s") };
     eprintln!(
-        "{status}{scene_name} ({}x{}) with {name}: {spp:.1} spp in {:.2} s, {:.2} Mrays/s, {:.2} Msamples/s -> {}",
+        "{status}{scene_name} ({}x{}) with {name}: {spp:.1} {per_pixel} in {:.2} s, {:.2} Mrays/s, {:.2} {per_second} -> {}",
         scene.film.width,
         scene.film.height,
         s.seconds,

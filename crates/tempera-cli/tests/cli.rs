@@ -140,3 +140,40 @@ fn mmlt_renders_with_a_mutation_budget() {
     assert_clean_error(&["render", "--integrator", "mmlt", "--large-step", "2"], "probability");
     assert_clean_error(&["render", "--mpp", "4", "--spp", "4"], "cannot be used with");
 }
+
+#[test]
+fn stats_json_reports_every_depth() {
+    let dir = scratch("stats");
+    let out = tempera()
+        .current_dir(&dir)
+        .args([
+            "render",
+            "--integrator",
+            "mmlt",
+            "--mpp",
+            "4",
+            "--maxdepth",
+            "3",
+            "--bootstrap",
+            "2000",
+            "--resolution",
+            "16x16",
+        ])
+        .args(["-o", "m.exr", "--stats", "s.json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(dir.join("s.json")).unwrap();
+    for key in [
+        "\"depths\"",
+        "\"b_rel_se\"",
+        "\"large_step\"",
+        "\"small_step\"",
+        "\"technique_change\"",
+        "\"mutations_per_second\"",
+    ] {
+        assert!(text.contains(key), "{key} missing from {text}");
+    }
+    assert_eq!(text.matches("\"depth\":").count(), 4, "depths 0..=3");
+    assert!(stderr(&out).contains("acc.small"), "terminal table expected");
+}

@@ -12,7 +12,7 @@ use super::{Budget, Integrator, RenderControl, RenderOutput, RenderSettings, Ren
 use crate::film::SplatBuffer;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::{Pcg32, hash};
-use crate::mcmc::{Contribution, DepthStats, Paths, evaluate};
+use crate::mcmc::{Chain, Contribution, DepthStats, Paths, Target, evaluate};
 use crate::sampler::PssSampler;
 use crate::scene::Scene;
 use crate::texture::Image;
@@ -53,30 +53,16 @@ fn sampler_for(seed: u64, k: usize, i: usize, m: &MmltIntegrator) -> PssSampler 
     PssSampler::new(bootstrap_seed(seed, k, i), k as u64, m.sigma, m.large_step_probability)
 }
 
-/// What every chain of a render shares.
-struct ChainContext<'a> {
+/// The MMLT target of one path depth.
+struct DepthTarget<'a> {
     scene: &'a Scene,
-    seed: u64,
-    /// Per depth, the bootstrap distribution that start states are drawn from.
-    starts: Vec<Distribution1D>,
-    deadline: Option<Instant>,
-    control: &'a RenderControl<'a>,
+    depth: usize,
 }
 
-/// One chain's work.
-struct ChainJob {
-    depth: usize,
-    index: usize,
-    mutations: u64,
-}
-
-struct ChainResult {
-    depth: usize,
-    stats: DepthStats,
-    large_sum: f64,
-    large_sum2: f64,
-    large_count: u64,
-    rays: u64,
+impl Target for DepthTarget<'_> {
+    fn evaluate(&self, sampler: &mut PssSampler, paths: &mut Paths, rays: &mut u64) -> (Contribution, bool) {
+        evaluate(self.scene, self.depth, sampler, paths, rays)
+    }
 }
 
 /// The result of the bootstrap of one depth: target values and their mean.
@@ -87,14 +73,41 @@ struct Bootstrap {
     invalid: u64,
 }
 
+/// Per-thread, per-depth splat buffers, locked once per chain run.
+struct ThreadSplats(Vec<Mutex<Vec<SplatBuffer>>>);
+
+impl ThreadSplats {
+    fn new(threads: usize, depths: usize, w: u32, h: u32) -> Self {
+        Self((0..threads).map(|_| Mutex::new((0..depths).map(|_| SplatBuffer::new(w, h)).collect())).collect())
+    }
+
+    fn with<R>(&self, depth: usize, f: impl FnOnce(&mut SplatBuffer) -> R) -> R {
+        let index = rayon::current_thread_index().unwrap_or(0) % self.0.len();
+        let mut guard = self.0[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        f(&mut guard[depth])
+    }
+
+    fn merged(self, depths: usize, w: u32, h: u32) -> Vec<SplatBuffer> {
+        let mut out = vec![SplatBuffer::new(w, h); depths];
+        for buffer in self.0 {
+            let buffer = buffer.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+            for (total, b) in out.iter_mut().zip(&buffer) {
+                total.merge(b);
+            }
+        }
+        out
+    }
+}
+
 impl MmltIntegrator {
     fn bootstrap(&self, scene: &Scene, seed: u64, k: usize) -> (Bootstrap, u64) {
+        let target = DepthTarget { scene, depth: k };
         let results: Vec<(f32, bool, u64)> = (0..self.bootstrap)
             .into_par_iter()
             .map_init(Paths::default, |paths, i| {
                 let mut sampler = sampler_for(seed, k, i, self);
                 let mut rays = 0;
-                let (c, invalid) = evaluate(scene, k, &mut sampler, paths, &mut rays);
+                let (c, invalid) = target.evaluate(&mut sampler, paths, &mut rays);
                 (c.f, invalid, rays)
             })
             .collect();
@@ -105,68 +118,6 @@ impl MmltIntegrator {
         let invalid = results.iter().filter(|r| r.1).count() as u64;
         let rays = results.iter().map(|r| r.2).sum();
         (Bootstrap { values, mean, sum2, invalid }, rays)
-    }
-
-    /// Runs one chain, splatting `C/f`-weighted contributions into `splats`.
-    fn run_chain(&self, ctx: &ChainContext, job: &ChainJob, splats: &mut SplatBuffer) -> ChainResult {
-        let ChainContext { scene, seed, deadline, control, .. } = *ctx;
-        let starts = &ctx.starts[job.depth];
-        let k = job.depth;
-        let start_time = Instant::now();
-        let mut rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, job.index as u64]), 7);
-        let (start, _, _) = starts.sample_discrete(rng.next_f32());
-        let mut sampler = sampler_for(seed, k, start, self);
-        let mut paths = Paths::default();
-        let mut rays = 0;
-        let (mut current, _) = evaluate(scene, k, &mut sampler, &mut paths, &mut rays);
-        sampler.accept();
-        let mut stats = DepthStats { depth: k, ..DepthStats::default() };
-        let (mut large_sum, mut large_sum2, mut large_count) = (0.0f64, 0.0f64, 0u64);
-        let splat = |splats: &mut SplatBuffer, c: &Contribution, weight: f32| {
-            if weight > 0.0 && c.f > 0.0 {
-                splats.add(c.raster, c.l * (weight / c.f));
-            }
-        };
-        for m in 0..job.mutations {
-            if m % 256 == 0 && (control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d))
-            {
-                break;
-            }
-            sampler.start_iteration();
-            let large = sampler.is_large_step();
-            let (proposal, invalid) = evaluate(scene, k, &mut sampler, &mut paths, &mut rays);
-            stats.invalid += u64::from(invalid);
-            if large {
-                large_sum += f64::from(proposal.f);
-                large_sum2 += f64::from(proposal.f).powi(2);
-                large_count += 1;
-            }
-            let a = if current.f > 0.0 { (proposal.f / current.f).min(1.0) } else { 1.0 };
-            splat(splats, &proposal, a);
-            splat(splats, &current, 1.0 - a);
-            stats.mutations += 1;
-            if large {
-                stats.large_steps_proposed += 1;
-            } else {
-                stats.small_steps_proposed += 1;
-            }
-            if rng.next_f32() < a {
-                if proposal.technique != current.technique {
-                    stats.technique_changes += 1;
-                }
-                if large {
-                    stats.large_steps_accepted += 1;
-                } else {
-                    stats.small_steps_accepted += 1;
-                }
-                current = proposal;
-                sampler.accept();
-            } else {
-                sampler.reject();
-            }
-        }
-        stats.seconds = start_time.elapsed().as_secs_f64();
-        ChainResult { depth: k, stats, large_sum, large_sum2, large_count, rays }
     }
 
     /// Renders and returns the per-depth statistics alongside the image.
@@ -207,60 +158,78 @@ impl MmltIntegrator {
         if b_total.is_nan() || b_total <= 0.0 {
             return Err("no light path reaches the camera (every bootstrap sample was zero)".into());
         }
-        // Mutations per depth in proportion to b_k; a time budget sets a large cap and stops at
-        // the deadline.
-        let (total_mutations, deadline) = match settings.budget {
-            Budget::Samples(mpp) => (u64::from(mpp) * pixels, None),
-            Budget::Time(d) => (u64::MAX / 4, Some(start + d)),
+        let share = |k: usize| boots[k].mean / b_total;
+        // Chains per depth, started from bootstrap states drawn in proportion to their value.
+        let mpp_total = match settings.budget {
+            Budget::Samples(mpp) => Some(u64::from(mpp) * pixels),
+            Budget::Time(_) => None,
         };
-        let mut jobs = Vec::new();
+        let deadline = match settings.budget {
+            Budget::Time(d) => Some(start + d),
+            Budget::Samples(_) => None,
+        };
+        let mut plan = Vec::new();
         for (k, b) in boots.iter().enumerate() {
-            let m_k = ((b.mean / b_total) * total_mutations as f64).round() as u64;
-            if m_k == 0 || b.mean <= 0.0 {
+            if b.mean <= 0.0 {
                 continue;
             }
-            let chains = (self.chains as u64).min(m_k).max(1);
+            let m_k = mpp_total.map(|m| (share(k) * m as f64).round() as u64);
+            if m_k == Some(0) {
+                continue;
+            }
+            let chains = m_k.map_or(self.chains as u64, |m| (self.chains as u64).min(m)).max(1);
             for c in 0..chains {
-                let mutations = m_k / chains + u64::from(c < m_k % chains);
-                jobs.push(ChainJob { depth: k, index: c as usize, mutations });
+                plan.push((k, c as usize, chains, m_k));
             }
         }
-        let ctx = ChainContext {
-            scene,
-            seed,
-            starts: boots.iter().map(|b| Distribution1D::new(&b.values)).collect(),
-            deadline,
-            control,
-        };
-        let threads = rayon::current_num_threads().max(1);
-        let buffers: Vec<Mutex<Vec<SplatBuffer>>> =
-            (0..threads).map(|_| Mutex::new((0..depths).map(|_| SplatBuffer::new(w, h)).collect())).collect();
-        let results: Vec<ChainResult> = jobs
+        let starts: Vec<Distribution1D> = boots.iter().map(|b| Distribution1D::new(&b.values)).collect();
+        let mut chains: Vec<Chain> = plan
             .par_iter()
-            .map(|job| {
-                let index = rayon::current_thread_index().unwrap_or(0) % buffers.len();
-                let mut guard = buffers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-                self.run_chain(&ctx, job, &mut guard[job.depth])
+            .map(|&(k, c, _, _)| {
+                let mut rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, c as u64]), 7);
+                let (index, _, _) = starts[k].sample_discrete(rng.next_f32());
+                Chain::start(&DepthTarget { scene, depth: k }, sampler_for(seed, k, index, self), rng, k)
             })
             .collect();
-        // Merge statistics in job order; refine b_k with the large-step proposals.
+        let splats = ThreadSplats::new(rayon::current_num_threads().max(1), depths, w, h);
+        let stop = || control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d);
+        let run_round = |chains: &mut [Chain], quota: &(dyn Fn(usize) -> u64 + Sync)| {
+            chains.par_iter_mut().enumerate().for_each(|(i, chain)| {
+                let (k, ..) = plan[i];
+                let n = quota(i);
+                let done = splats.with(k, |buffer| chain.run(&DepthTarget { scene, depth: k }, n, buffer, &stop));
+                (control.on_progress)(done);
+            });
+        };
+        match mpp_total {
+            // A fixed budget: one round, each chain its share of its depth's mutations.
+            Some(_) => run_round(&mut chains, &|i| {
+                let (_, c, n, m_k) = plan[i];
+                let m_k = m_k.unwrap_or(0);
+                m_k / n + u64::from((c as u64) < m_k % n)
+            }),
+            // A time budget: rounds of about one mutation per pixel, shared in proportion to b_k,
+            // until the deadline.
+            None => {
+                while !stop() {
+                    run_round(&mut chains, &|i| {
+                        let (k, _, n, _) = plan[i];
+                        ((share(k) * pixels as f64 / n as f64).round() as u64).max(1)
+                    });
+                }
+            }
+        }
+        // Merge statistics in chain order; refine b_k with the large-step proposals.
         let mut report =
             MmltReport { depths: (0..depths).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect() };
         let mut large: Vec<(f64, f64, u64)> = vec![(0.0, 0.0, 0); depths];
-        for r in &results {
-            report.depths[r.depth].merge(&r.stats);
-            large[r.depth].0 += r.large_sum;
-            large[r.depth].1 += r.large_sum2;
-            large[r.depth].2 += r.large_count;
-            total_rays += r.rays;
+        for chain in &chains {
+            let k = chain.stats.depth;
+            report.depths[k].merge(&chain.stats);
+            large[k] = (large[k].0 + chain.large.0, large[k].1 + chain.large.1, large[k].2 + chain.large.2);
+            total_rays += chain.rays;
         }
-        let mut per_depth = vec![SplatBuffer::new(w, h); depths];
-        for buffer in buffers {
-            let buffer = buffer.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
-            for (total, b) in per_depth.iter_mut().zip(&buffer) {
-                total.merge(b);
-            }
-        }
+        let per_depth = splats.merged(depths, w, h);
         let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
         let mut invalid = 0;
         for (k, d) in report.depths.iter_mut().enumerate() {
@@ -278,6 +247,7 @@ impl MmltIntegrator {
             if d.mutations == 0 {
                 continue;
             }
+            // Each depth's splats estimate its image per mutation: N_pixels · b_k / M_k.
             let layer = per_depth[k].image(d.b * pixels as f64 / d.mutations as f64);
             for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
                 *p += *q;
@@ -292,7 +262,7 @@ impl MmltIntegrator {
             seconds: start.elapsed().as_secs_f64(),
             cancelled: control.cancel.load(Ordering::Relaxed),
         };
-        Ok((RenderOutput { image, stats, layers: Vec::new() }, report))
+        Ok((RenderOutput { image, stats, layers: Vec::new(), chains: report.depths.clone() }, report))
     }
 }
 
@@ -317,6 +287,7 @@ impl Integrator for MmltIntegrator {
                 image: Image::filled(scene.film.width as usize, scene.film.height as usize, crate::math::Rgb::ZERO),
                 stats: RenderStats::default(),
                 layers: Vec::new(),
+                chains: Vec::new(),
             },
         }
     }

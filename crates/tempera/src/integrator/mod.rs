@@ -61,6 +61,8 @@ pub struct RenderOutput {
     pub stats: RenderStats,
     /// Extra images an integrator produces on request (BDPT's per-strategy images), with names.
     pub layers: Vec<Image>,
+    /// Per-depth Markov-chain statistics (MCMC integrators only).
+    pub chains: Vec<crate::mcmc::DepthStats>,
 }
 
 /// A light-transport algorithm.

@@ -378,3 +378,27 @@ fn mmlt_without_light_reaching_the_camera_is_a_clear_error() {
         .unwrap();
     assert!(err.contains("no light path reaches the camera"), "{err}");
 }
+
+#[test]
+fn mmlt_time_budget_advances_every_depth() {
+    let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let m = MmltIntegrator { bootstrap: 20_000, chains: 8, ..MmltIntegrator::new(4) };
+    let budget = Budget::Time(std::time::Duration::from_millis(400));
+    let (out, report) =
+        m.render_with_report(&scene, &RenderSettings { budget, seed: 4, threads: 0 }, &control).unwrap();
+    assert!(out.stats.seconds < 5.0);
+    // Every depth got mutations in proportion to b_k (within rounding of one round).
+    let total: u64 = report.depths.iter().map(|d| d.mutations).sum();
+    let b_total: f64 = report.depths.iter().map(|d| d.b).sum();
+    for d in &report.depths {
+        assert!(d.mutations > 0, "depth {} starved", d.depth);
+        let share = d.mutations as f64 / total as f64;
+        assert!((share - d.b / b_total).abs() < 0.05, "depth {}: share {share} vs {}", d.depth, d.b / b_total);
+    }
+    let bdpt = render_with(&scene, &BdptIntegrator::new(4), Budget::Samples(128), 5, 0);
+    let mean =
+        |img: &crate::texture::Image| img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64;
+    assert!((mean(&out.image) / mean(&bdpt.image) - 1.0).abs() < 0.05, "{} vs {}", mean(&out.image), mean(&bdpt.image));
+}

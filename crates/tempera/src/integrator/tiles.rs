@@ -190,5 +190,5 @@ pub fn render_tiles<E: PixelEstimator>(
         }
     }
     let layers = layers.iter().map(|l| l.image(per_sample)).collect();
-    RenderOutput { image, stats, layers }
+    RenderOutput { image, stats, layers, chains: Vec::new() }
 }

@@ -2,8 +2,10 @@
 //! state as one bidirectional strategy of a given path depth (the MMLT target of Hachisuka,
 //! Kaplanyan & Dachsbacher 2014), and the chain statistics.
 
+pub mod chain;
 pub mod stats;
 
+pub use chain::{Chain, Target};
 pub use stats::DepthStats;
 
 use crate::bidir::{Heuristic, Subpaths, Vertex, camera_subpath_vertices, connect, light_subpath_vertices};

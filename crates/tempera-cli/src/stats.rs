@@ -1,0 +1,76 @@
+//! Render statistics for people and programs: a short per-depth table of Markov-chain statistics
+//! on the terminal, and `--stats FILE.json` (keys documented in the README).
+
+use anyhow::{Context, Result};
+use serde_json::{Value, json};
+use std::path::Path;
+use tempera::integrator::RenderOutput;
+use tempera::mcmc::DepthStats;
+
+fn rate(accepted: u64, proposed: u64) -> f64 {
+    if proposed == 0 { 0.0 } else { accepted as f64 / proposed as f64 }
+}
+
+fn depth_json(d: &DepthStats) -> Value {
+    let proposed = d.large_steps_proposed + d.small_steps_proposed;
+    json!({
+        "depth": d.depth,
+        "b": d.b,
+        "b_rel_se": d.b_rel_se,
+        "bootstrap_samples": d.bootstrap_samples,
+        "large_step_samples": d.large_step_samples,
+        "mutations": d.mutations,
+        "acceptance": {
+            "total": d.acceptance(),
+            "large_step": rate(d.large_steps_accepted, d.large_steps_proposed),
+            "small_step": rate(d.small_steps_accepted, d.small_steps_proposed),
+            "technique_change": rate(d.technique_changes, proposed),
+        },
+        "invalid": d.invalid,
+        "seconds": d.seconds,
+    })
+}
+
+/// The statistics of a render as JSON.
+pub fn to_json(integrator: &str, out: &RenderOutput) -> Value {
+    let s = &out.stats;
+    let mutations: u64 = out.chains.iter().map(|d| d.mutations).sum();
+    json!({
+        "integrator": integrator,
+        "seconds": s.seconds,
+        "samples": s.pixel_samples,
+        "rays": s.rays,
+        "rays_per_second": s.rays as f64 / s.seconds.max(1e-9),
+        "invalid_samples": s.invalid_samples,
+        "cancelled": s.cancelled,
+        "mutations": mutations,
+        "mutations_per_second": mutations as f64 / s.seconds.max(1e-9),
+        "depths": out.chains.iter().map(depth_json).collect::<Vec<_>>(),
+    })
+}
+
+pub fn write(path: &Path, integrator: &str, out: &RenderOutput) -> Result<()> {
+    let text = serde_json::to_string_pretty(&to_json(integrator, out)).expect("JSON values serialise");
+    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// A per-depth table of chain statistics on standard error.
+pub fn print_table(out: &RenderOutput) {
+    if out.chains.is_empty() {
+        return;
+    }
+    eprintln!("depth          b   rel.se   mutations  acc.large  acc.small  technique");
+    for d in &out.chains {
+        let proposed = d.large_steps_proposed + d.small_steps_proposed;
+        eprintln!(
+            "{:5} {:10.4e} {:7.2}% {:11} {:10.3} {:10.3} {:10.3}",
+            d.depth,
+            d.b,
+            100.0 * d.b_rel_se,
+            d.mutations,
+            rate(d.large_steps_accepted, d.large_steps_proposed),
+            rate(d.small_steps_accepted, d.small_steps_proposed),
+            rate(d.technique_changes, proposed),
+        );
+    }
+}
