@@ -191,7 +191,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         heuristic,
         bootstrap: args.bootstrap.unwrap_or(0) as usize,
         chains: args.chains.unwrap_or(0) as usize,
-        large_step: args.large_step.unwrap_or(0.0),
+        large_step: args.large_step,
     };
     let integrator = integrator::create(&name, &options).with_context(|| format!("unknown integrator '{name}'"))?;
     let budget = match args.time {

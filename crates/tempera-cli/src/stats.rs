@@ -14,7 +14,7 @@ fn rate(accepted: u64, proposed: u64) -> f64 {
 fn depth_json(d: &DepthStats) -> Value {
     let proposed = d.large_steps_proposed + d.small_steps_proposed;
     json!({
-        "depth": d.depth,
+        "depth": if d.all_depths { json!("all") } else { json!(d.depth) },
         "b": d.b,
         "b_rel_se": d.b_rel_se,
         "bootstrap_samples": d.bootstrap_samples,
@@ -63,8 +63,8 @@ pub fn print_table(out: &RenderOutput) {
     for d in &out.chains {
         let proposed = d.large_steps_proposed + d.small_steps_proposed;
         eprintln!(
-            "{:5} {:10.4e} {:7.2}% {:11} {:10.3} {:10.3} {:10.3}",
-            d.depth,
+            "{:>5} {:10.4e} {:7.2}% {:11} {:10.3} {:10.3} {:10.3}",
+            if d.all_depths { "all".to_owned() } else { d.depth.to_string() },
             d.b,
             100.0 * d.b_rel_se,
             d.mutations,

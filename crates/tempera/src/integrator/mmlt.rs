@@ -12,7 +12,7 @@ use super::{Budget, Integrator, RenderControl, RenderOutput, RenderSettings, Ren
 use crate::film::SplatBuffer;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::{Pcg32, hash};
-use crate::mcmc::{Chain, Contribution, DepthStats, Paths, Target, evaluate};
+use crate::mcmc::{Chain, Contribution, DepthStats, Paths, State, Target, evaluate};
 use crate::sampler::PssSampler;
 use crate::scene::Scene;
 use crate::texture::Image;
@@ -49,8 +49,19 @@ fn bootstrap_seed(seed: u64, k: usize, i: usize) -> u64 {
     hash(&[seed, 0xb007, k as u64, i as u64])
 }
 
-fn sampler_for(seed: u64, k: usize, i: usize, m: &MmltIntegrator) -> PssSampler {
+fn sampler_for(seed: u64, k: usize, i: usize, m: &ChainSettings) -> PssSampler {
     PssSampler::new(bootstrap_seed(seed, k, i), k as u64, m.sigma, m.large_step_probability)
+}
+
+/// What the chain driver shared by MMLT and PSSMLT needs to know.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ChainSettings {
+    /// Bootstrap samples per group.
+    pub bootstrap: usize,
+    /// Independent chains per group.
+    pub chains: usize,
+    pub sigma: f32,
+    pub large_step_probability: f32,
 }
 
 /// The MMLT target of one path depth.
@@ -60,8 +71,12 @@ struct DepthTarget<'a> {
 }
 
 impl Target for DepthTarget<'_> {
-    fn evaluate(&self, sampler: &mut PssSampler, paths: &mut Paths, rays: &mut u64) -> (Contribution, bool) {
-        evaluate(self.scene, self.depth, sampler, paths, rays)
+    type State = Contribution;
+
+    fn evaluate(&self, sampler: &mut PssSampler, paths: &mut Paths, rays: &mut u64, out: &mut Contribution) -> bool {
+        let (c, invalid) = evaluate(self.scene, self.depth, sampler, paths, rays);
+        *out = c;
+        invalid
     }
 }
 
@@ -99,17 +114,19 @@ impl ThreadSplats {
     }
 }
 
-impl MmltIntegrator {
-    fn bootstrap(&self, scene: &Scene, seed: u64, k: usize) -> (Bootstrap, u64) {
-        let target = DepthTarget { scene, depth: k };
+impl ChainSettings {
+    fn bootstrap<T: Target + Sync>(&self, target: &T, seed: u64, k: usize) -> (Bootstrap, u64) {
         let results: Vec<(f32, bool, u64)> = (0..self.bootstrap)
             .into_par_iter()
-            .map_init(Paths::default, |paths, i| {
-                let mut sampler = sampler_for(seed, k, i, self);
-                let mut rays = 0;
-                let (c, invalid) = target.evaluate(&mut sampler, paths, &mut rays);
-                (c.f, invalid, rays)
-            })
+            .map_init(
+                || (Paths::default(), T::State::default()),
+                |(paths, state), i| {
+                    let mut sampler = sampler_for(seed, k, i, self);
+                    let mut rays = 0;
+                    let invalid = target.evaluate(&mut sampler, paths, &mut rays, state);
+                    (state.value(), invalid, rays)
+                },
+            )
             .collect();
         let values: Vec<f32> = results.iter().map(|r| r.0).collect();
         let n = values.len().max(1) as f64;
@@ -120,36 +137,48 @@ impl MmltIntegrator {
         (Bootstrap { values, mean, sum2, invalid }, rays)
     }
 
-    /// Renders and returns the per-depth statistics alongside the image.
-    pub fn render_with_report(
+    /// Renders with `groups` independent sets of chains (MMLT: one per path depth; PSSMLT: one),
+    /// group `k` sampling `targets(k)`, and returns the per-group statistics alongside the image.
+    pub(super) fn render<T>(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
         control: &RenderControl,
-    ) -> Result<(RenderOutput, MmltReport), String> {
+        depths: usize,
+        targets: impl Fn(usize) -> T + Sync,
+    ) -> Result<(RenderOutput, MmltReport), String>
+    where
+        T: Target + Sync,
+        T::State: Send,
+    {
         let start = Instant::now();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(settings.threads)
             .build()
             .expect("a rayon thread pool can be created");
-        pool.install(|| self.render_in_pool(scene, settings, control, start))
+        pool.install(|| self.render_in_pool(scene, settings, control, start, depths, &targets))
     }
 
-    fn render_in_pool(
+    fn render_in_pool<T>(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
         control: &RenderControl,
         start: Instant,
-    ) -> Result<(RenderOutput, MmltReport), String> {
+        depths: usize,
+        targets: &(impl Fn(usize) -> T + Sync),
+    ) -> Result<(RenderOutput, MmltReport), String>
+    where
+        T: Target + Sync,
+        T::State: Send,
+    {
         let seed = settings.seed;
-        let depths = self.max_depth as usize + 1;
         let (w, h) = (scene.film.width, scene.film.height);
         let pixels = u64::from(w) * u64::from(h);
         let mut total_rays = 0;
         let boots: Vec<Bootstrap> = (0..depths)
             .map(|k| {
-                let (b, rays) = self.bootstrap(scene, seed, k);
+                let (b, rays) = self.bootstrap(&targets(k), seed, k);
                 total_rays += rays;
                 b
             })
@@ -183,21 +212,21 @@ impl MmltIntegrator {
             }
         }
         let starts: Vec<Distribution1D> = boots.iter().map(|b| Distribution1D::new(&b.values)).collect();
-        let mut chains: Vec<Chain> = plan
+        let mut chains: Vec<Chain<T::State>> = plan
             .par_iter()
             .map(|&(k, c, _, _)| {
                 let mut rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, c as u64]), 7);
                 let (index, _, _) = starts[k].sample_discrete(rng.next_f32());
-                Chain::start(&DepthTarget { scene, depth: k }, sampler_for(seed, k, index, self), rng, k)
+                Chain::start(&targets(k), sampler_for(seed, k, index, self), rng, k)
             })
             .collect();
         let splats = ThreadSplats::new(rayon::current_num_threads().max(1), depths, w, h);
         let stop = || control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d);
-        let run_round = |chains: &mut [Chain], quota: &(dyn Fn(usize) -> u64 + Sync)| {
+        let run_round = |chains: &mut [Chain<T::State>], quota: &(dyn Fn(usize) -> u64 + Sync)| {
             chains.par_iter_mut().enumerate().for_each(|(i, chain)| {
                 let (k, ..) = plan[i];
                 let n = quota(i);
-                let done = splats.with(k, |buffer| chain.run(&DepthTarget { scene, depth: k }, n, buffer, &stop));
+                let done = splats.with(k, |buffer| chain.run(&targets(k), n, buffer, &stop));
                 (control.on_progress)(done);
             });
         };
@@ -263,6 +292,28 @@ impl MmltIntegrator {
             cancelled: control.cancel.load(Ordering::Relaxed),
         };
         Ok((RenderOutput { image, stats, layers: Vec::new(), chains: report.depths.clone() }, report))
+    }
+}
+
+impl MmltIntegrator {
+    fn chain_settings(&self) -> ChainSettings {
+        ChainSettings {
+            bootstrap: self.bootstrap,
+            chains: self.chains,
+            sigma: self.sigma,
+            large_step_probability: self.large_step_probability,
+        }
+    }
+
+    /// Renders and returns the per-depth statistics alongside the image.
+    pub fn render_with_report(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> Result<(RenderOutput, MmltReport), String> {
+        let depths = self.max_depth as usize + 1;
+        self.chain_settings().render(scene, settings, control, depths, |depth| DepthTarget { scene, depth })
     }
 }
 

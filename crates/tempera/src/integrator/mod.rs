@@ -5,6 +5,7 @@
 pub mod bdpt;
 pub mod mmlt;
 pub mod path;
+pub mod pssmlt;
 pub mod tiles;
 
 #[cfg(test)]
@@ -13,6 +14,7 @@ mod tests;
 pub use bdpt::{BdptIntegrator, Strategies};
 pub use mmlt::{MmltIntegrator, MmltReport};
 pub use path::PathIntegrator;
+pub use pssmlt::PssmltIntegrator;
 
 use crate::scene::Scene;
 use crate::texture::Image;
@@ -86,7 +88,7 @@ pub trait Integrator: Send + Sync {
 }
 
 /// Names accepted by [`create`].
-pub const INTEGRATORS: &[&str] = &["path", "bdpt", "mmlt"];
+pub const INTEGRATORS: &[&str] = &["path", "bdpt", "mmlt", "pssmlt"];
 
 /// Options shared by the integrators [`create`] makes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -97,11 +99,11 @@ pub struct IntegratorOptions {
     pub strategy_images: bool,
     /// BDPT: the MIS heuristic.
     pub heuristic: crate::bidir::Heuristic,
-    /// MMLT: bootstrap samples per depth, chains per depth and large-step probability (0 keeps
-    /// the integrator's defaults).
+    /// MMLT and PSSMLT: bootstrap samples and chains (per depth for MMLT) and the large-step
+    /// probability (`None` or 0 samples and chains keep the integrator's defaults).
     pub bootstrap: usize,
     pub chains: usize,
-    pub large_step: f32,
+    pub large_step: Option<f32>,
 }
 
 /// The integrator called `name`.
@@ -114,11 +116,16 @@ pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integra
             Some(Box::new(MmltIntegrator {
                 bootstrap: if options.bootstrap > 0 { options.bootstrap } else { defaults.bootstrap },
                 chains: if options.chains > 0 { options.chains } else { defaults.chains },
-                large_step_probability: if options.large_step > 0.0 {
-                    options.large_step
-                } else {
-                    defaults.large_step_probability
-                },
+                large_step_probability: options.large_step.unwrap_or(defaults.large_step_probability),
+                ..defaults
+            }))
+        }
+        "pssmlt" => {
+            let defaults = PssmltIntegrator::new(d);
+            Some(Box::new(PssmltIntegrator {
+                bootstrap: if options.bootstrap > 0 { options.bootstrap } else { defaults.bootstrap },
+                chains: if options.chains > 0 { options.chains } else { defaults.chains },
+                large_step_probability: options.large_step.unwrap_or(defaults.large_step_probability),
                 ..defaults
             }))
         }

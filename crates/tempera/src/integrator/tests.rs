@@ -402,3 +402,49 @@ fn mmlt_time_budget_advances_every_depth() {
         |img: &crate::texture::Image| img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64;
     assert!((mean(&out.image) / mean(&bdpt.image) - 1.0).abs() < 0.05, "{} vs {}", mean(&out.image), mean(&bdpt.image));
 }
+
+fn pssmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> (RenderOutput, MmltReport) {
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let m = PssmltIntegrator { bootstrap: 200_000, ..PssmltIntegrator::new(5) };
+    m.render_with_report(scene, &RenderSettings { budget: Budget::Samples(mpp), seed, threads }, &control).unwrap()
+}
+
+#[test]
+fn pssmlt_agrees_with_bdpt_on_a_cornell_box() {
+    let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
+    let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
+    let (pssmlt, report) = pssmlt_render(&scene, 1024, 2, 0);
+    let (a, b) = (block_stats(&pssmlt.image, 16), block_stats(&bdpt.image, 16));
+    let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
+    assert!((mean(&a) / mean(&b) - 1.0).abs() < 0.01, "image means {} vs {}", mean(&a), mean(&b));
+    for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
+        assert!((ma - mb).abs() < 4.0 * sb + 0.03 * mb, "block {i}: pssmlt {ma} vs bdpt {mb} ± {sb}");
+    }
+    assert_eq!(report.depths.len(), 1);
+    assert!(report.depths[0].all_depths && report.depths[0].invalid == 0);
+    assert!(report.depths[0].b_rel_se < 0.01, "b is pinned down: {:?}", report.depths[0]);
+}
+
+#[test]
+fn pssmlt_passes_the_white_furnace() {
+    let scene = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
+    let (out, _) = pssmlt_render(&scene, 256, 3, 0);
+    let (sphere, sky) = classify_furnace_pixels(&scene);
+    let mean = |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
+    assert!((mean(&sphere) - 0.8).abs() < 0.01, "sphere {}", mean(&sphere));
+    assert!((mean(&sky) - 1.0).abs() < 0.01, "sky {}", mean(&sky));
+}
+
+#[test]
+fn pssmlt_is_bit_identical_at_any_thread_count() {
+    let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let m = PssmltIntegrator { bootstrap: 5_000, chains: 8, ..PssmltIntegrator::new(4) };
+    let run = |threads| {
+        m.render(&scene, &RenderSettings { budget: Budget::Samples(8), seed: 9, threads }, &control).image.pixels
+    };
+    let one = run(1);
+    assert!(one == run(2) && one == run(3));
+}

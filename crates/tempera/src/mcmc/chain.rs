@@ -4,20 +4,33 @@
 //! that are NaN, infinite or negative count as zero. The chain keeps its state between calls, so
 //! time-budgeted renders can advance all chains in rounds.
 
-use super::{Contribution, DepthStats, Paths};
+use super::{DepthStats, Paths};
 use crate::film::SplatBuffer;
 use crate::math::rng::Pcg32;
 use crate::sampler::PssSampler;
 
-/// Evaluates the sampler's current state; the flag reports an invalid value.
-pub trait Target {
-    fn evaluate(&self, sampler: &mut PssSampler, paths: &mut Paths, rays: &mut u64) -> (Contribution, bool);
+/// What a chain needs of an evaluated state.
+pub trait State: Default {
+    /// The target value `f` (0 for invalid states).
+    fn value(&self) -> f32;
+    /// The bidirectional technique the state chose, for the technique-change statistics.
+    fn technique(&self) -> usize;
+    /// Adds the state's contributions, each times `scale`, to the film.
+    fn splat(&self, splats: &mut SplatBuffer, scale: f32);
 }
 
-pub struct Chain {
+/// Evaluates the sampler's current state into `out`; returns whether its value was invalid
+/// (NaN, infinite or negative, counted as zero).
+pub trait Target {
+    type State: State;
+    fn evaluate(&self, sampler: &mut PssSampler, paths: &mut Paths, rays: &mut u64, out: &mut Self::State) -> bool;
+}
+
+pub struct Chain<S> {
     sampler: PssSampler,
     rng: Pcg32,
-    current: Contribution,
+    current: S,
+    proposal: S,
     paths: Paths,
     pub stats: DepthStats,
     /// Sum, sum of squares and count of the large-step proposals' values.
@@ -25,17 +38,19 @@ pub struct Chain {
     pub rays: u64,
 }
 
-impl Chain {
+impl<S: State> Chain<S> {
     /// Starts from the state `sampler` holds (its first, large step), evaluated and accepted.
-    pub fn start(target: &impl Target, mut sampler: PssSampler, rng: Pcg32, depth: usize) -> Self {
+    pub fn start(target: &impl Target<State = S>, mut sampler: PssSampler, rng: Pcg32, depth: usize) -> Self {
         let mut paths = Paths::default();
         let mut rays = 0;
-        let (current, _) = target.evaluate(&mut sampler, &mut paths, &mut rays);
+        let mut current = S::default();
+        target.evaluate(&mut sampler, &mut paths, &mut rays, &mut current);
         sampler.accept();
         Self {
             sampler,
             rng,
             current,
+            proposal: S::default(),
             paths,
             stats: DepthStats { depth, ..DepthStats::default() },
             large: (0.0, 0.0, 0),
@@ -46,15 +61,15 @@ impl Chain {
     /// Makes up to `mutations` mutations, checking `stop` every 256; returns how many were made.
     pub fn run(
         &mut self,
-        target: &impl Target,
+        target: &impl Target<State = S>,
         mutations: u64,
         splats: &mut SplatBuffer,
         stop: &dyn Fn() -> bool,
     ) -> u64 {
         let start = std::time::Instant::now();
-        let splat = |splats: &mut SplatBuffer, c: &Contribution, weight: f32| {
-            if weight > 0.0 && c.f > 0.0 {
-                splats.add(c.raster, c.l * (weight / c.f));
+        let splat = |splats: &mut SplatBuffer, c: &S, weight: f32| {
+            if weight > 0.0 && c.value() > 0.0 {
+                c.splat(splats, weight / c.value());
             }
         };
         let mut done = 0;
@@ -64,23 +79,24 @@ impl Chain {
             }
             self.sampler.start_iteration();
             let large = self.sampler.is_large_step();
-            let (proposal, invalid) = target.evaluate(&mut self.sampler, &mut self.paths, &mut self.rays);
+            let invalid = target.evaluate(&mut self.sampler, &mut self.paths, &mut self.rays, &mut self.proposal);
+            let (proposal, current) = (&self.proposal, &self.current);
             let s = &mut self.stats;
             s.invalid += u64::from(invalid);
             if large {
-                let f = f64::from(proposal.f);
+                let f = f64::from(proposal.value());
                 self.large = (self.large.0 + f, self.large.1 + f * f, self.large.2 + 1);
                 s.large_steps_proposed += 1;
             } else {
                 s.small_steps_proposed += 1;
             }
-            let a = if self.current.f > 0.0 { (proposal.f / self.current.f).min(1.0) } else { 1.0 };
-            splat(splats, &proposal, a);
-            splat(splats, &self.current, 1.0 - a);
+            let a = if current.value() > 0.0 { (proposal.value() / current.value()).min(1.0) } else { 1.0 };
+            splat(splats, proposal, a);
+            splat(splats, current, 1.0 - a);
             s.mutations += 1;
             done += 1;
             if self.rng.next_f32() < a {
-                if proposal.technique != self.current.technique {
+                if proposal.technique() != current.technique() {
                     s.technique_changes += 1;
                 }
                 if large {
@@ -88,7 +104,7 @@ impl Chain {
                 } else {
                     s.small_steps_accepted += 1;
                 }
-                self.current = proposal;
+                std::mem::swap(&mut self.current, &mut self.proposal);
                 self.sampler.accept();
             } else {
                 self.sampler.reject();

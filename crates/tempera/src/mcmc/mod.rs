@@ -3,18 +3,21 @@
 //! Kaplanyan & Dachsbacher 2014), and the chain statistics.
 
 pub mod chain;
+pub mod full;
 pub mod stats;
 
-pub use chain::{Chain, Target};
+pub use chain::{Chain, State, Target};
+pub use full::{FullContribution, evaluate_full};
 pub use stats::DepthStats;
 
 use crate::bidir::{Heuristic, Subpaths, Vertex, camera_subpath_vertices, connect, light_subpath_vertices};
+use crate::film::SplatBuffer;
 use crate::math::{Rgb, Vec2, luminance};
 use crate::sampler::{PssSampler, Sampler, Stream};
 use crate::scene::Scene;
 
 /// A state's contribution: the radiance it adds and where on the film.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Contribution {
     /// `(k+2)·w·f/p`: the MIS-weighted strategy value times the number of strategies.
     pub l: Rgb,
@@ -27,6 +30,20 @@ pub struct Contribution {
 
 impl Contribution {
     pub const ZERO: Contribution = Contribution { l: Rgb::ZERO, raster: Vec2::ZERO, f: 0.0, technique: 0 };
+}
+
+impl State for Contribution {
+    fn value(&self) -> f32 {
+        self.f
+    }
+
+    fn technique(&self) -> usize {
+        self.technique
+    }
+
+    fn splat(&self, splats: &mut SplatBuffer, scale: f32) {
+        splats.add(self.raster, self.l * scale);
+    }
 }
 
 /// Scratch space for subpaths.

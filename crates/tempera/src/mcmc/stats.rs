@@ -4,6 +4,8 @@
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DepthStats {
     pub depth: usize,
+    /// The row covers every path depth (PSSMLT's single set of chains); `depth` is then 0.
+    pub all_depths: bool,
     /// Normalisation `b_k` (mean target value) and its relative standard error.
     pub b: f64,
     pub b_rel_se: f64,
