@@ -1,11 +1,13 @@
-//! Equal-time comparison of the path tracer and BDPT against a long BDPT reference, printing
+//! Equal-time comparison of the path tracer, BDPT, MMLT and PSSMLT against a long BDPT reference, printing
 //! relMSE = mean((I − R)² / (R² + ε)) on luminance with ε = 0.01.
 //!
 //! `cargo run --release --example equal_time -- [SCENE] [SECONDS] [REFERENCE_SPP] [SIZE]`
 
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
-use tempera::integrator::{BdptIntegrator, Budget, Integrator, PathIntegrator, RenderControl, RenderSettings};
+use tempera::integrator::{
+    BdptIntegrator, Budget, Integrator, MmltIntegrator, PathIntegrator, PssmltIntegrator, RenderControl, RenderSettings,
+};
 use tempera::math::luminance;
 use tempera::texture::Image;
 
@@ -55,12 +57,14 @@ fn main() -> anyhow::Result<()> {
     for (name, integrator) in [
         ("path", &PathIntegrator::new(depth) as &dyn Integrator),
         ("bdpt", &BdptIntegrator::new(depth) as &dyn Integrator),
+        ("mmlt", &MmltIntegrator::new(depth) as &dyn Integrator),
+        ("pssmlt", &PssmltIntegrator::new(depth) as &dyn Integrator),
     ] {
         for seed in 1..=2 {
             let out = render(integrator, budget, seed);
             let spp = out.stats.pixel_samples as f64 / f64::from(scene.film.width * scene.film.height);
             println!(
-                "{name:5} seed {seed}: {spp:7.1} spp in {:.1} s, relMSE {:.5}",
+                "{name:6} seed {seed}: {spp:7.1} samples or mutations per pixel in {:.1} s, relMSE {:.5}",
                 out.stats.seconds,
                 rel_mse(&out.image, &reference.image)
             );

@@ -177,3 +177,19 @@ fn stats_json_reports_every_depth() {
     assert_eq!(text.matches("\"depth\":").count(), 4, "depths 0..=3");
     assert!(stderr(&out).contains("acc.small"), "terminal table expected");
 }
+
+#[test]
+fn pssmlt_renders_and_reports_one_row_for_all_depths() {
+    let dir = scratch("pssmlt");
+    let out = tempera()
+        .current_dir(&dir)
+        .args(["render", "--integrator", "pssmlt", "--mpp", "2", "--bootstrap", "2000", "--resolution", "16x16"])
+        .args(["-o", "p.exr", "--stats", "p.json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(dir.join("p.json")).unwrap();
+    assert!(text.contains("\"integrator\": \"pssmlt\""), "{text}");
+    assert_eq!(text.matches("\"depth\": \"all\"").count(), 1, "{text}");
+    assert!(dir.join("p.exr").exists());
+}

@@ -30,6 +30,18 @@ impl Ggx {
         roughness.max(0.0).sqrt()
     }
 
+    /// The distribution with each alpha replaced by `R(α, a) = min(1, √(α² + a²))`, the
+    /// roughening of tempered MMLT (Šik & Křivánek 2016): `a = 0` is the identity, larger `a`
+    /// flattens the lobe, and alpha never exceeds 1. Smooth (delta) distributions are returned
+    /// unchanged: roughening only ever widens lobes that can already be connected.
+    pub fn roughened(&self, a: f32) -> Self {
+        if a <= 0.0 || self.effectively_smooth() {
+            return *self;
+        }
+        let r = |alpha: f32| alpha.hypot(a).min(1.0).max(alpha);
+        Self { alpha_x: r(self.alpha_x), alpha_y: r(self.alpha_y) }
+    }
+
     #[inline]
     pub fn effectively_smooth(&self) -> bool {
         self.alpha_x.max(self.alpha_y) < SMOOTH_ALPHA

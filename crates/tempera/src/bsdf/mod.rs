@@ -95,6 +95,20 @@ impl Bsdf {
         (s.pdf > 0.0 && s.f.is_finite() && s.wi.z != 0.0).then_some(s)
     }
 
+    /// The BSDF with its GGX lobes roughened by `a` ([`Ggx::roughened`]); diffuse lobes and
+    /// smooth (delta) lobes are unchanged, so a connectible BSDF stays connectible and a delta one
+    /// stays delta.
+    pub fn roughened(&self, a: f32) -> Bsdf {
+        let mut out = *self;
+        match &mut out {
+            Bsdf::Diffuse(_) | Bsdf::DiffuseTransmission(_) => {}
+            Bsdf::Conductor(b) => b.distribution = b.distribution.roughened(a),
+            Bsdf::Dielectric(b) => b.distribution = b.distribution.roughened(a),
+            Bsdf::Plastic(b) => b.distribution = b.distribution.roughened(a),
+        }
+        out
+    }
+
     /// True when every lobe is a Dirac delta: no connection can be made through this BSDF.
     #[inline]
     pub fn is_delta(&self) -> bool {

@@ -202,3 +202,43 @@ fn smooth_dielectric_chooses_lobes_by_fresnel() {
     assert!((frac - want).abs() < 0.005, "{frac} vs {want}");
     assert!(bsdf.is_delta() && bsdf.eval(wo, -wo, TransportMode::Radiance) == Rgb::ZERO);
 }
+
+#[test]
+fn roughening_is_the_identity_at_zero_and_widens_glossy_lobes() {
+    let g = Ggx::new(0.02, 0.3);
+    assert_eq!(g.roughened(0.0), g);
+    let r = g.roughened(0.1);
+    assert!((r.alpha_x - 0.02f32.hypot(0.1)).abs() < 1e-7 && (r.alpha_y - 0.3f32.hypot(0.1)).abs() < 1e-7);
+    assert_eq!(Ggx::isotropic(0.9).roughened(0.8), Ggx::isotropic(1.0), "alpha is capped at 1");
+    assert_eq!(Ggx::isotropic(1.5).roughened(0.3), Ggx::isotropic(1.5), "roughening never sharpens");
+    for (name, bsdf) in rough_bsdfs() {
+        let same = bsdf.roughened(0.0);
+        let (wo, wi) = (dir(30.0, 10.0), dir(35.0, 195.0));
+        assert_eq!(same.eval(wo, wi, TransportMode::Radiance), bsdf.eval(wo, wi, TransportMode::Radiance), "{name}");
+        assert_eq!(bsdf.roughened(0.5).is_delta(), bsdf.is_delta(), "{name}");
+    }
+    // Delta lobes stay delta.
+    let mirror = Bsdf::Conductor(Conductor {
+        distribution: Ggx::isotropic(0.0),
+        eta: Rgb::splat(0.2),
+        k: Rgb::splat(3.0),
+        tint: Rgb::ONE,
+    });
+    assert!(mirror.roughened(0.5).is_delta());
+    let glass = Bsdf::Dielectric(Dielectric { distribution: Ggx::isotropic(0.0), eta: 1.5 });
+    assert!(glass.roughened(0.5).is_delta());
+    // A sharp glossy lobe gets flatter: lower at the mirror direction, higher away from it.
+    let glossy = Bsdf::Conductor(Conductor {
+        distribution: Ggx::isotropic(0.02),
+        eta: Rgb::splat(0.2),
+        k: Rgb::splat(3.0),
+        tint: Rgb::ONE,
+    });
+    let wo = dir(40.0, 0.0);
+    let (peak, off) = (dir(40.0, 180.0), dir(20.0, 180.0));
+    let rough = glossy.roughened(0.2);
+    let m = TransportMode::Radiance;
+    assert!(rough.eval(wo, peak, m).x < 0.1 * glossy.eval(wo, peak, m).x);
+    assert!(rough.eval(wo, off, m).x > 10.0 * glossy.eval(wo, off, m).x);
+    assert!(rough.pdf(wo, off) > 10.0 * glossy.pdf(wo, off));
+}
