@@ -28,6 +28,10 @@ pub struct Connection {
     pub g: f32,
     /// Reverse densities around the connection that entered the MIS weight.
     pub rev: ReversePdfs,
+    /// `l` without the two connection factors: `l = base · f_light · f_camera` up to rounding.
+    pub base: Rgb,
+    /// The endpoint sampled anew for `s = 1` (a light vertex) or `t = 1` (a camera vertex).
+    pub sampled: Option<Vertex>,
 }
 
 /// Geometric coupling `|cos θ₀| |cos θ₁| / d²` with shading normals, or 0 when occluded.
@@ -90,12 +94,14 @@ pub fn connect<S: Sampler>(
     let mut sampled: Option<Vertex> = None;
     let mut raster = None;
     let (mut f_light, mut f_camera, mut g) = (Rgb::ONE, Rgb::ONE, 1.0);
+    let base;
     let l = if s == 0 {
         let pt = &camera[t - 1];
         if !pt.is_light() {
             return None;
         }
         f_light = pt.le(scene, &camera[t - 2]);
+        base = pt.beta;
         f_light * pt.beta
     } else if t == 1 {
         let qs = &light[s - 1];
@@ -112,9 +118,11 @@ pub fn connect<S: Sampler>(
         v.pdf_fwd = 0.0;
         raster = Some(cs.raster);
         f_light = qs.f(&v, TransportMode::Importance);
+        let cos = if qs.is_on_surface() { qs.ns.dot(cs.wi).abs() } else { 1.0 };
+        base = qs.beta * v.beta * cos;
         let mut l = qs.beta * f_light * v.beta;
         if qs.is_on_surface() {
-            l *= qs.ns.dot(cs.wi).abs();
+            l *= cos;
         }
         if l.max_element() > 0.0 {
             *rays += 1;
@@ -146,9 +154,11 @@ pub fn connect<S: Sampler>(
         );
         v.pdf_fwd = v.pdf_light_origin(scene, pt);
         f_camera = pt.f(&v, TransportMode::Radiance);
+        let cos = if pt.is_on_surface() { pt.ns.dot(ls.wi).abs() } else { 1.0 };
+        base = pt.beta * v.beta * cos;
         let mut l = pt.beta * f_camera * v.beta;
         if pt.is_on_surface() {
-            l *= pt.ns.dot(ls.wi).abs();
+            l *= cos;
         }
         if l.max_element() > 0.0 {
             *rays += 1;
@@ -170,6 +180,7 @@ pub fn connect<S: Sampler>(
             return None;
         }
         g = geometry(scene, qs, pt, rays);
+        base = qs.beta * pt.beta * g;
         l * g
     };
     if !l.is_finite() || l.max_element() <= 0.0 {
@@ -178,5 +189,5 @@ pub fn connect<S: Sampler>(
     let rev =
         if s + t == 2 { ReversePdfs::default() } else { reverse_pdfs(scene, light, camera, sampled.as_ref(), s, t) };
     let weight = mis_weight_with(scene, light, camera, sampled.as_ref(), (s, t), &rev, heuristic);
-    Some(Connection { l, weight, raster, f_light, f_camera, g, rev })
+    Some(Connection { l, weight, raster, f_light, f_camera, g, rev, base, sampled })
 }

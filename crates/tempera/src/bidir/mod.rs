@@ -4,6 +4,7 @@
 pub mod connect;
 pub mod mis;
 pub mod subpath;
+pub mod temper;
 pub mod vertex;
 
 #[cfg(test)]
@@ -12,4 +13,5 @@ mod tests;
 pub use connect::{Connection, Subpaths, connect};
 pub use mis::{Heuristic, ReversePdfs, mis_weight, mis_weight_with, reverse_pdfs};
 pub use subpath::{camera_subpath, camera_subpath_vertices, light_subpath, light_subpath_vertices};
+pub use temper::{TemperScratch, Tempering, tempered};
 pub use vertex::{Vertex, VertexKind};

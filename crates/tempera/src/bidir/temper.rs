@@ -1,0 +1,168 @@
+//! Re-evaluation of an evaluated strategy under a tempered target (Šik & Křivánek 2016, §4):
+//! the GGX lobes at the two connection vertices are roughened by `a` ([`Bsdf::roughened`])
+//! while every other vertex, the camera and the emitters stay as they are. Nothing is ever
+//! sampled *from* a connection vertex, so the same subpaths describe the same path under every
+//! tempered target, and the re-evaluation needs no rays: the connection's visibility and
+//! geometry are those [`connect`](super::connect) found, kept in [`Connection::base`].
+//!
+//! Which vertices are connection vertices: `q_s` and `p_t` for `s, t ≥ 2`; the surface vertex
+//! joined to a sampled light (`s = 1`) or camera (`t = 1`) point. A camera path that hits an
+//! emitter (`s = 0`) has no connection edge and is unchanged.
+//!
+//! With `roughen_mis` the MIS weight is recomputed from the roughened BSDFs' reverse densities
+//! (the forward densities are those the subpaths were sampled with); without it the weight of
+//! the untempered evaluation is kept.
+//!
+//! [`Bsdf::roughened`]: crate::bsdf::Bsdf::roughened
+
+use super::connect::{Connection, Subpaths};
+use super::mis::{Heuristic, ReversePdfs, mis_weight_with, reverse_pdfs};
+use super::vertex::{Vertex, VertexKind};
+use crate::bsdf::TransportMode;
+use crate::math::Rgb;
+use crate::scene::Scene;
+
+/// Scratch copies of the subpaths with roughened connection vertices.
+#[derive(Default)]
+pub struct TemperScratch {
+    light: Vec<Vertex>,
+    camera: Vec<Vertex>,
+}
+
+fn roughened(v: &Vertex, a: f32) -> Vertex {
+    let mut v = *v;
+    if v.kind == VertexKind::Surface
+        && let Some(b) = &mut v.bsdf
+    {
+        b.bsdf = b.bsdf.roughened(a);
+    }
+    v
+}
+
+/// One tempered target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tempering {
+    /// The roughening `a` (0: the scene's BSDFs).
+    pub a: f32,
+    pub heuristic: Heuristic,
+    /// Recompute the MIS weight from the roughened reverse densities.
+    pub roughen_mis: bool,
+}
+
+/// The unweighted contribution and MIS weight of strategy `(s, t)`, evaluated by
+/// [`connect`](super::connect) as `c`, under the target `temper`. `a = 0` returns `c`'s own
+/// values exactly.
+pub fn tempered(
+    scene: &Scene,
+    paths: Subpaths,
+    (s, t): (usize, usize),
+    c: &Connection,
+    temper: &Tempering,
+    scratch: &mut TemperScratch,
+) -> (Rgb, f32) {
+    let Tempering { a, heuristic, roughen_mis } = *temper;
+    if a <= 0.0 || s == 0 {
+        return (c.l, c.weight);
+    }
+    let Subpaths { light, camera } = paths;
+    scratch.light.clear();
+    scratch.light.extend_from_slice(&light[..s.min(light.len())]);
+    scratch.camera.clear();
+    scratch.camera.extend_from_slice(&camera[..t.min(camera.len())]);
+    // The surface-side connection vertices, roughened in the scratch copies.
+    if s >= 2 || t == 1 {
+        scratch.light[s - 1] = roughened(&light[s - 1], a);
+    }
+    if t >= 2 {
+        scratch.camera[t - 1] = roughened(&camera[t - 1], a);
+    }
+    let (f_light, f_camera) = match (s, t) {
+        (_, 1) => {
+            let Some(v) = &c.sampled else { return (c.l, c.weight) };
+            (scratch.light[s - 1].f(v, TransportMode::Importance), c.f_camera)
+        }
+        (1, _) => {
+            let Some(v) = &c.sampled else { return (c.l, c.weight) };
+            (c.f_light, scratch.camera[t - 1].f(v, TransportMode::Radiance))
+        }
+        _ => {
+            let (qs, pt) = (&scratch.light[s - 1], &scratch.camera[t - 1]);
+            (qs.f(pt, TransportMode::Importance), pt.f(qs, TransportMode::Radiance))
+        }
+    };
+    let l = c.base * f_light * f_camera;
+    if !roughen_mis {
+        return (l, c.weight);
+    }
+    let (light, camera) = (&scratch.light[..], &scratch.camera[..]);
+    let rev =
+        if s + t == 2 { ReversePdfs::default() } else { reverse_pdfs(scene, light, camera, c.sampled.as_ref(), s, t) };
+    (l, mis_weight_with(scene, light, camera, c.sampled.as_ref(), (s, t), &rev, heuristic))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bidir::{camera_subpath, connect, light_subpath};
+    use crate::sampler::{PssSampler, Sampler, Stream};
+
+    /// Re-evaluating without rays agrees with evaluating the same subpaths from scratch with
+    /// roughened connection vertices (new shadow rays, new reverse densities), for every kind of
+    /// strategy, on the default scene's glossy metal and rough glass.
+    #[test]
+    fn tempered_re_evaluation_matches_a_full_evaluation_with_roughened_vertices() {
+        let mut scene = crate::scenes::default_scene().build().unwrap();
+        scene.set_resolution(32, 32);
+        let (mut camera, mut light, mut rays) = (Vec::new(), Vec::new(), 0);
+        let mut scratch = TemperScratch::default();
+        let (mut checked, mut changed, mut light_tracing, mut light_sampling) = (0, 0, 0, 0);
+        let a = 0.3;
+        let at = |a, roughen_mis| Tempering { a, heuristic: Heuristic::Power, roughen_mis };
+        for i in 0..3000u64 {
+            let mut sampler = PssSampler::new(i, 0, 0.01, 0.3);
+            sampler.start_stream(Stream::Camera);
+            let film = sampler.next_2d();
+            let ray = scene.camera.generate_ray(film * 32.0, sampler.next_2d());
+            camera_subpath(&scene, ray, &mut sampler, 5, &mut camera, &mut rays);
+            light_subpath(&scene, &mut sampler, 5, &mut light, &mut rays);
+            for t in 1..=camera.len() {
+                for s in 1..=light.len() {
+                    let paths = Subpaths { light: &light, camera: &camera };
+                    let Some(c) = connect(&scene, paths, (s, t), &mut sampler, Heuristic::Power, &mut rays) else {
+                        continue;
+                    };
+                    let (l0, w0) = tempered(&scene, paths, (s, t), &c, &at(0.0, true), &mut scratch);
+                    assert!(l0 == c.l && w0 == c.weight, "a = 0 is the untempered target exactly");
+                    let (l, w) = tempered(&scene, paths, (s, t), &c, &at(a, true), &mut scratch);
+                    let (_, w_kept) = tempered(&scene, paths, (s, t), &c, &at(a, false), &mut scratch);
+                    assert_eq!(w_kept, c.weight);
+                    // From scratch: roughened copies of the connection vertices, connected anew
+                    // with the same connection numbers.
+                    let mut light2 = light.clone();
+                    let mut camera2 = camera.clone();
+                    if s >= 2 {
+                        light2[s - 1] = roughened(&light[s - 1], a);
+                    }
+                    if t >= 2 {
+                        camera2[t - 1] = roughened(&camera[t - 1], a);
+                    }
+                    let paths2 = Subpaths { light: &light2, camera: &camera2 };
+                    let full = connect(&scene, paths2, (s, t), &mut sampler, Heuristic::Power, &mut rays);
+                    let Some(full) = full else {
+                        assert!(l.max_element() <= 1e-6 * c.l.max_element(), "({s},{t}): {l} but none");
+                        continue;
+                    };
+                    let tol = 1e-4 * full.l.max_element().max(c.l.max_element());
+                    assert!((l - full.l).abs().max_element() <= tol, "({s},{t}): {l} vs {}", full.l);
+                    assert!((w - full.weight).abs() <= 1e-4, "({s},{t}): weight {w} vs {}", full.weight);
+                    checked += 1;
+                    changed += usize::from((l - c.l).abs().max_element() > 1e-3 * c.l.max_element());
+                    light_tracing += usize::from(t == 1);
+                    light_sampling += usize::from(s == 1);
+                }
+            }
+        }
+        assert!(checked > 1000 && changed > 100, "{checked} checked, {changed} changed by roughening");
+        assert!(light_tracing > 50 && light_sampling > 50, "{light_tracing} t = 1, {light_sampling} s = 1");
+    }
+}
