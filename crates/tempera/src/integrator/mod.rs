@@ -6,6 +6,7 @@ pub mod bdpt;
 pub mod mmlt;
 pub mod path;
 pub mod pssmlt;
+pub mod tempered;
 pub mod tiles;
 
 #[cfg(test)]

@@ -1,0 +1,134 @@
+//! Parallel tempering for MMLT (Šik & Křivánek 2016): per path depth an ensemble of replicas
+//! whose targets are flattened by roughening the BSDFs at the connection vertices
+//! ([`crate::bidir::tempered`]), exchanging states by one of three swap strategies. This module
+//! holds the strategies, which only see the ensemble through its cross-evaluations
+//! `f_i(u_j)` (target of replica `i` at the state replica `j` holds); each leaves every
+//! replica's target invariant:
+//!
+//! - [`Neighbor`]: propose exchanging replicas `i` and `i + 1` (uniform `i`), accepted with
+//!   `min(1, f_i(u_j) f_j(u_i) / (f_i(u_i) f_j(u_j)))`;
+//! - [`EquiEnergy`] (Baragatti, Grimaud & Pommeret 2012): states fall into log-spaced rings of
+//!   the main target `f_0`; two replicas in a ring holding at least two are proposed, with the
+//!   same acceptance. The ring is a function of the state alone, so an exchange leaves the ring
+//!   occupancy, and thereby the proposal probability, unchanged;
+//! - [`Permutation`]: a Gibbs step over all `K!` assignments of states to replicas, drawn with
+//!   probability proportional to `Π_i f_i(u_σ(i))` (always accepted).
+
+mod equi_energy;
+mod neighbor;
+mod permutation;
+
+#[cfg(test)]
+mod tests;
+
+pub use equi_energy::EquiEnergy;
+pub use neighbor::Neighbor;
+pub use permutation::Permutation;
+
+use crate::math::rng::Pcg32;
+
+/// What the swap steps did, per ensemble (merged per depth).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SwapStats {
+    /// Replicas in the ensemble.
+    pub replicas: usize,
+    /// Attempts and acceptances per replica pair `(i, j)`, `i < j`, at index `i·K + j`.
+    pub attempts: Vec<u64>,
+    pub accepted: Vec<u64>,
+    /// Swap steps taken.
+    pub steps: u64,
+    /// Equi-energy steps in which no ring held two replicas.
+    pub no_pair: u64,
+    /// Permutation steps that drew a permutation other than the identity, and that gave
+    /// replica 0 another state.
+    pub non_identity: u64,
+    pub main_changed: u64,
+}
+
+impl SwapStats {
+    pub fn new(replicas: usize) -> Self {
+        Self {
+            replicas,
+            attempts: vec![0; replicas * replicas],
+            accepted: vec![0; replicas * replicas],
+            ..Self::default()
+        }
+    }
+
+    fn record(&mut self, i: usize, j: usize, accepted: bool) {
+        let (i, j) = (i.min(j), i.max(j));
+        self.attempts[i * self.replicas + j] += 1;
+        self.accepted[i * self.replicas + j] += u64::from(accepted);
+    }
+
+    pub fn merge(&mut self, o: &SwapStats) {
+        if self.replicas == 0 {
+            *self = SwapStats::new(o.replicas);
+        }
+        for (a, b) in self.attempts.iter_mut().zip(&o.attempts) {
+            *a += b;
+        }
+        for (a, b) in self.accepted.iter_mut().zip(&o.accepted) {
+            *a += b;
+        }
+        self.steps += o.steps;
+        self.no_pair += o.no_pair;
+        self.non_identity += o.non_identity;
+        self.main_changed += o.main_changed;
+    }
+
+    /// Acceptance rate of exchanges between neighbours `(i, i + 1)` over all their attempts.
+    pub fn neighbor_acceptance(&self) -> f64 {
+        let k = self.replicas;
+        let (mut attempts, mut accepted) = (0, 0);
+        for i in 0..k.saturating_sub(1) {
+            attempts += self.attempts[i * k + i + 1];
+            accepted += self.accepted[i * k + i + 1];
+        }
+        if attempts == 0 { 0.0 } else { accepted as f64 / attempts as f64 }
+    }
+}
+
+/// Cross-evaluations of an ensemble: `f(i, j)` is replica `i`'s target at the state replica `j`
+/// holds. Implementations may compute entries lazily; strategies ask only for what they need.
+pub trait CrossValues {
+    fn replicas(&self) -> usize;
+    fn f(&mut self, i: usize, j: usize) -> f64;
+}
+
+/// A swap strategy. `step` returns the new assignment `σ` (replica `i` takes the state of
+/// replica `σ[i]`), or `None` when the states stay where they are.
+pub trait SwapStrategy: Send + Sync {
+    fn name(&self) -> &'static str;
+    fn step(&self, values: &mut dyn CrossValues, rng: &mut Pcg32, stats: &mut SwapStats) -> Option<Vec<usize>>;
+}
+
+/// The Metropolis acceptance of exchanging the states of replicas `i` and `j`, in `f64`.
+/// A pair whose current product is zero (a replica that has not found light yet) is exchanged
+/// whenever the exchanged product is positive.
+pub fn swap_acceptance(values: &mut dyn CrossValues, i: usize, j: usize) -> f64 {
+    let current = values.f(i, i) * values.f(j, j);
+    let exchanged = values.f(i, j) * values.f(j, i);
+    if !exchanged.is_finite() || exchanged <= 0.0 {
+        return 0.0;
+    }
+    if current.is_nan() || current <= 0.0 { 1.0 } else { (exchanged / current).min(1.0) }
+}
+
+/// Proposes exchanging `i` and `j`; returns the assignment when accepted.
+fn try_exchange(
+    values: &mut dyn CrossValues,
+    i: usize,
+    j: usize,
+    rng: &mut Pcg32,
+    stats: &mut SwapStats,
+) -> Option<Vec<usize>> {
+    let a = swap_acceptance(values, i, j);
+    let accepted = rng.next_f64() < a;
+    stats.record(i, j, accepted);
+    accepted.then(|| {
+        let mut sigma: Vec<usize> = (0..values.replicas()).collect();
+        sigma.swap(i, j);
+        sigma
+    })
+}
