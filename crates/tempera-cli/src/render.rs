@@ -72,6 +72,19 @@ pub struct RenderArgs {
     /// BDPT: write one EXR per strategy (s, t) with its MIS-weighted contribution into DIR.
     #[arg(long, value_name = "DIR")]
     pub strategy_images: Option<PathBuf>,
+    /// Tempered MMLT: replicas per ensemble (default 5; 1 is plain MMLT).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=32))]
+    pub replicas: Option<u64>,
+    /// Tempered MMLT: how replicas exchange states.
+    #[arg(long, default_value = "neighbor", value_parser = tempera::integrator::Swap::NAMES.to_vec())]
+    pub swap: String,
+    /// Tempered MMLT: fixed roughening ladder a1,a2,… of replicas 1 … K−1 (increasing, positive).
+    #[arg(long, value_parser = parse_ladder)]
+    pub ladder: Option<Ladder>,
+    /// Tempered MMLT: MIS weights of tempered replicas from the roughened or the original
+    /// densities.
+    #[arg(long, default_value = "roughened", value_parser = ["roughened", "original"])]
+    pub tempered_mis: String,
     /// Treat scene-loading warnings (unknown directives, unused parameters, approximations) as
     /// errors.
     #[arg(long)]
@@ -90,6 +103,22 @@ fn parse_probability(s: &str) -> Result<f32, String> {
         Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
         _ => Err(format!("expected a probability in (0, 1], got '{s}'")),
     }
+}
+
+/// A roughening ladder from the command line.
+#[derive(Clone, Debug)]
+pub struct Ladder(pub Vec<f32>);
+
+fn parse_ladder(s: &str) -> Result<Ladder, String> {
+    let values: Result<Vec<f32>, _> = s.split(',').map(|v| v.trim().parse::<f32>()).collect();
+    let values = values.map_err(|_| format!("expected comma-separated numbers such as 0.02,0.06,0.18, got '{s}'"))?;
+    if values.is_empty() || values.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 10.0) {
+        return Err(format!("ladder values must lie in (0, 10], got '{s}'"));
+    }
+    if values.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(format!("ladder values must increase, got '{s}'"));
+    }
+    Ok(Ladder(values))
 }
 
 fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
@@ -185,6 +214,21 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bail!("--strategy-images needs --integrator bdpt");
     }
     let heuristic = if args.mis == "balance" { Heuristic::Balance } else { Heuristic::Power };
+    // A ladder fixes the number of replicas; both given must agree.
+    let replicas = match (args.replicas, &args.ladder) {
+        (Some(r), Some(l)) if r as usize != l.0.len() + 1 => {
+            bail!("--ladder gives {} values, so --replicas must be {} (it is {r})", l.0.len(), l.0.len() + 1)
+        }
+        (Some(r), _) => r as usize,
+        (None, Some(l)) => l.0.len() + 1,
+        (None, None) => 0,
+    };
+    if args.swap == "permutation" && replicas > tempera::integrator::tempered::Permutation::MAX_REPLICAS {
+        bail!(
+            "--swap permutation enumerates all K! permutations: use at most {} replicas",
+            tempera::integrator::tempered::Permutation::MAX_REPLICAS
+        );
+    }
     let options = integrator::IntegratorOptions {
         max_depth,
         strategy_images: args.strategy_images.is_some(),
@@ -192,6 +236,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bootstrap: args.bootstrap.unwrap_or(0) as usize,
         chains: args.chains.unwrap_or(0) as usize,
         large_step: args.large_step,
+        replicas,
+        swap: tempera::integrator::Swap::parse(&args.swap).unwrap_or_default(),
+        ladder: args.ladder.as_ref().map_or_else(Vec::new, |l| l.0.clone()),
+        keep_mis: args.tempered_mis == "original",
     };
     let integrator = integrator::create(&name, &options).with_context(|| format!("unknown integrator '{name}'"))?;
     let budget = match args.time {

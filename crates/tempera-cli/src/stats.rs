@@ -5,15 +5,36 @@ use anyhow::{Context, Result};
 use serde_json::{Value, json};
 use std::path::Path;
 use tempera::integrator::RenderOutput;
-use tempera::mcmc::DepthStats;
+use tempera::mcmc::{DepthStats, SwapStats};
 
 fn rate(accepted: u64, proposed: u64) -> f64 {
     if proposed == 0 { 0.0 } else { accepted as f64 / proposed as f64 }
 }
 
+fn swaps_json(s: &SwapStats) -> Value {
+    let k = s.replicas;
+    let mut pairs = Vec::new();
+    for i in 0..k {
+        for j in i + 1..k {
+            let (attempts, accepted) = (s.attempts[i * k + j], s.accepted[i * k + j]);
+            if attempts > 0 || j == i + 1 {
+                pairs.push(json!({ "pair": [i, j], "attempts": attempts, "accepted": accepted }));
+            }
+        }
+    }
+    json!({
+        "steps": s.steps,
+        "swap_pairs": pairs,
+        "neighbor_acceptance": s.neighbor_acceptance(),
+        "no_pair_rate": rate(s.no_pair, s.steps),
+        "non_identity_rate": rate(s.non_identity, s.steps),
+        "main_changed_rate": rate(s.main_changed, s.steps),
+    })
+}
+
 fn depth_json(d: &DepthStats) -> Value {
     let proposed = d.large_steps_proposed + d.small_steps_proposed;
-    json!({
+    let mut v = json!({
         "depth": if d.all_depths { json!("all") } else { json!(d.depth) },
         "b": d.b,
         "b_rel_se": d.b_rel_se,
@@ -28,7 +49,16 @@ fn depth_json(d: &DepthStats) -> Value {
         },
         "invalid": d.invalid,
         "seconds": d.seconds,
-    })
+    });
+    if !d.ladder.is_empty() {
+        // Shortest decimal form of each f32 (0.02, not 0.019999999552965164).
+        let ladder: Vec<f64> = d.ladder.iter().map(|a| a.to_string().parse().unwrap_or(f64::from(*a))).collect();
+        v["ladder"] = json!(ladder);
+    }
+    if let Some(swaps) = &d.swaps {
+        v["swaps"] = swaps_json(swaps);
+    }
+    v
 }
 
 /// The statistics of a render as JSON.
@@ -59,11 +89,13 @@ pub fn print_table(out: &RenderOutput) {
     if out.chains.is_empty() {
         return;
     }
-    eprintln!("depth          b   rel.se   mutations  acc.large  acc.small  technique");
+    let tempered = out.chains.iter().any(|d| d.swaps.is_some());
+    let swap_header = if tempered { "  swap.nbr" } else { "" };
+    eprintln!("depth          b   rel.se   mutations  acc.large  acc.small  technique{swap_header}");
     for d in &out.chains {
         let proposed = d.large_steps_proposed + d.small_steps_proposed;
         eprintln!(
-            "{:>5} {:10.4e} {:7.2}% {:11} {:10.3} {:10.3} {:10.3}",
+            "{:>5} {:10.4e} {:7.2}% {:11} {:10.3} {:10.3} {:10.3}{}",
             if d.all_depths { "all".to_owned() } else { d.depth.to_string() },
             d.b,
             100.0 * d.b_rel_se,
@@ -71,6 +103,11 @@ pub fn print_table(out: &RenderOutput) {
             rate(d.large_steps_accepted, d.large_steps_proposed),
             rate(d.small_steps_accepted, d.small_steps_proposed),
             rate(d.technique_changes, proposed),
+            if tempered {
+                d.swaps.as_ref().map_or("         -".to_owned(), |s| format!(" {:9.3}", s.neighbor_acceptance()))
+            } else {
+                String::new()
+            },
         );
     }
 }

@@ -193,3 +193,34 @@ fn pssmlt_renders_and_reports_one_row_for_all_depths() {
     assert_eq!(text.matches("\"depth\": \"all\"").count(), 1, "{text}");
     assert!(dir.join("p.exr").exists());
 }
+
+#[test]
+fn tempered_renders_with_every_swap_strategy_and_reports_swaps() {
+    let dir = scratch("tempered");
+    for swap in ["neighbor", "equi-energy", "permutation"] {
+        let json = format!("{swap}.json");
+        let out = tempera()
+            .current_dir(&dir)
+            .args(["render", "--integrator", "tempered", "--mpp", "2", "--bootstrap", "2000", "--maxdepth", "3"])
+            .args(["--resolution", "16x16", "--swap", swap, "--ladder", "0.05,0.2", "-o", "t.exr", "--stats", &json])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{swap}: {}", stderr(&out));
+        let text = std::fs::read_to_string(dir.join(&json)).unwrap();
+        assert!(text.contains("\"ladder\": [\n        0.0,\n        0.05,\n        0.2\n      ]"), "{text}");
+        assert!(text.contains("\"swap_pairs\"") && text.contains("\"non_identity_rate\""), "{text}");
+        assert!(stderr(&out).contains("swap.nbr"), "{}", stderr(&out));
+    }
+    let bad = tempera()
+        .current_dir(&dir)
+        .args(["render", "--integrator", "tempered", "--replicas", "4", "--ladder", "0.1,0.05", "--mpp", "1"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success() && stderr(&bad).contains("must increase"), "{}", stderr(&bad));
+    let mismatch = tempera()
+        .current_dir(&dir)
+        .args(["render", "--integrator", "tempered", "--replicas", "4", "--ladder", "0.05,0.1", "--mpp", "1"])
+        .output()
+        .unwrap();
+    assert!(!mismatch.status.success() && stderr(&mismatch).contains("--replicas must be 3"), "{}", stderr(&mismatch));
+}

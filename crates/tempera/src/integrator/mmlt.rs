@@ -49,7 +49,7 @@ fn bootstrap_seed(seed: u64, k: usize, i: usize) -> u64 {
     hash(&[seed, 0xb007, k as u64, i as u64])
 }
 
-fn sampler_for(seed: u64, k: usize, i: usize, m: &ChainSettings) -> PssSampler {
+pub(super) fn sampler_for(seed: u64, k: usize, i: usize, m: &ChainSettings) -> PssSampler {
     PssSampler::new(bootstrap_seed(seed, k, i), k as u64, m.sigma, m.large_step_probability)
 }
 
@@ -62,6 +62,67 @@ pub(super) struct ChainSettings {
     pub chains: usize,
     pub sigma: f32,
     pub large_step_probability: f32,
+}
+
+/// A unit of parallel work of the chain driver: one chain (MMLT, PSSMLT) or one ensemble of
+/// replicas (tempered MMLT).
+pub(super) trait Walker: Send {
+    /// Makes up to `mutations` mutations of the main chain, splatting into `splats`; returns
+    /// how many were made.
+    fn run(&mut self, mutations: u64, splats: &mut SplatBuffer, stop: &dyn Fn() -> bool) -> u64;
+    /// The main chain's statistics (with swap statistics for ensembles).
+    fn stats(&self) -> DepthStats;
+    /// Sum, sum of squares and count of the main chain's large-step proposal values.
+    fn large(&self) -> (f64, f64, u64);
+    fn rays(&self) -> u64;
+}
+
+/// Where a walker starts: chain `c` of group `k`, with the group's bootstrap values and the
+/// distribution of start states (in proportion to their value).
+pub(super) struct StartContext<'a> {
+    pub k: usize,
+    pub c: usize,
+    pub seed: u64,
+    pub rng: Pcg32,
+    pub starts: &'a Distribution1D,
+    pub bootstrap: &'a [f32],
+}
+
+/// One chain with its target.
+pub(super) struct Single<T: Target> {
+    pub chain: Chain<T::State>,
+    pub target: T,
+}
+
+impl<T: Target + Send> Walker for Single<T>
+where
+    T::State: Send,
+{
+    fn run(&mut self, mutations: u64, splats: &mut SplatBuffer, stop: &dyn Fn() -> bool) -> u64 {
+        self.chain.run(&self.target, mutations, Some(splats), stop)
+    }
+
+    fn stats(&self) -> DepthStats {
+        self.chain.stats.clone()
+    }
+
+    fn large(&self) -> (f64, f64, u64) {
+        self.chain.large
+    }
+
+    fn rays(&self) -> u64 {
+        self.chain.rays
+    }
+}
+
+impl ChainSettings {
+    /// Starts a single chain from a bootstrap state drawn in proportion to its value.
+    pub(super) fn start_single<T: Target>(&self, cx: StartContext, target: T) -> Single<T> {
+        let mut rng = cx.rng;
+        let (index, _, _) = cx.starts.sample_discrete(rng.next_f32());
+        let chain = Chain::start(&target, sampler_for(cx.seed, cx.k, index, self), rng, cx.k);
+        Single { chain, target }
+    }
 }
 
 /// The MMLT target of one path depth.
@@ -139,38 +200,39 @@ impl ChainSettings {
 
     /// Renders with `groups` independent sets of chains (MMLT: one per path depth; PSSMLT: one),
     /// group `k` sampling `targets(k)`, and returns the per-group statistics alongside the image.
-    pub(super) fn render<T>(
+    pub(super) fn render<T, W>(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
         control: &RenderControl,
         depths: usize,
         targets: impl Fn(usize) -> T + Sync,
+        start_walker: impl Fn(StartContext) -> W + Sync,
     ) -> Result<(RenderOutput, MmltReport), String>
     where
         T: Target + Sync,
-        T::State: Send,
+        W: Walker,
     {
         let start = Instant::now();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(settings.threads)
             .build()
             .expect("a rayon thread pool can be created");
-        pool.install(|| self.render_in_pool(scene, settings, control, start, depths, &targets))
+        pool.install(|| self.render_in_pool(scene, settings, control, start, depths, (&targets, &start_walker)))
     }
 
-    fn render_in_pool<T>(
+    fn render_in_pool<T, W>(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
         control: &RenderControl,
         start: Instant,
         depths: usize,
-        targets: &(impl Fn(usize) -> T + Sync),
+        (targets, start_walker): (&(impl Fn(usize) -> T + Sync), &(impl Fn(StartContext) -> W + Sync)),
     ) -> Result<(RenderOutput, MmltReport), String>
     where
         T: Target + Sync,
-        T::State: Send,
+        W: Walker,
     {
         let seed = settings.seed;
         let (w, h) = (scene.film.width, scene.film.height);
@@ -212,21 +274,20 @@ impl ChainSettings {
             }
         }
         let starts: Vec<Distribution1D> = boots.iter().map(|b| Distribution1D::new(&b.values)).collect();
-        let mut chains: Vec<Chain<T::State>> = plan
+        let mut chains: Vec<W> = plan
             .par_iter()
             .map(|&(k, c, _, _)| {
-                let mut rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, c as u64]), 7);
-                let (index, _, _) = starts[k].sample_discrete(rng.next_f32());
-                Chain::start(&targets(k), sampler_for(seed, k, index, self), rng, k)
+                let rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, c as u64]), 7);
+                start_walker(StartContext { k, c, seed, rng, starts: &starts[k], bootstrap: &boots[k].values })
             })
             .collect();
         let splats = ThreadSplats::new(rayon::current_num_threads().max(1), depths, w, h);
         let stop = || control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d);
-        let run_round = |chains: &mut [Chain<T::State>], quota: &(dyn Fn(usize) -> u64 + Sync)| {
+        let run_round = |chains: &mut [W], quota: &(dyn Fn(usize) -> u64 + Sync)| {
             chains.par_iter_mut().enumerate().for_each(|(i, chain)| {
                 let (k, ..) = plan[i];
                 let n = quota(i);
-                let done = splats.with(k, |buffer| chain.run(&targets(k), n, buffer, &stop));
+                let done = splats.with(k, |buffer| chain.run(n, buffer, &stop));
                 (control.on_progress)(done);
             });
         };
@@ -252,11 +313,11 @@ impl ChainSettings {
         let mut report =
             MmltReport { depths: (0..depths).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect() };
         let mut large: Vec<(f64, f64, u64)> = vec![(0.0, 0.0, 0); depths];
-        for chain in &chains {
-            let k = chain.stats.depth;
-            report.depths[k].merge(&chain.stats);
-            large[k] = (large[k].0 + chain.large.0, large[k].1 + chain.large.1, large[k].2 + chain.large.2);
-            total_rays += chain.rays;
+        for (chain, &(k, ..)) in chains.iter().zip(&plan) {
+            report.depths[k].merge(&chain.stats());
+            let l = chain.large();
+            large[k] = (large[k].0 + l.0, large[k].1 + l.1, large[k].2 + l.2);
+            total_rays += chain.rays();
         }
         let per_depth = splats.merged(depths, w, h);
         let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
@@ -313,7 +374,12 @@ impl MmltIntegrator {
         control: &RenderControl,
     ) -> Result<(RenderOutput, MmltReport), String> {
         let depths = self.max_depth as usize + 1;
-        self.chain_settings().render(scene, settings, control, depths, |depth| DepthTarget { scene, depth })
+        let chains = self.chain_settings();
+        let target = |depth| DepthTarget { scene, depth };
+        chains.render(scene, settings, control, depths, target, |cx| {
+            let k = cx.k;
+            chains.start_single(cx, target(k))
+        })
     }
 }
 

@@ -16,6 +16,7 @@ pub use bdpt::{BdptIntegrator, Strategies};
 pub use mmlt::{MmltIntegrator, MmltReport};
 pub use path::PathIntegrator;
 pub use pssmlt::PssmltIntegrator;
+pub use tempered::{Swap, TemperedIntegrator};
 
 use crate::scene::Scene;
 use crate::texture::Image;
@@ -89,10 +90,10 @@ pub trait Integrator: Send + Sync {
 }
 
 /// Names accepted by [`create`].
-pub const INTEGRATORS: &[&str] = &["path", "bdpt", "mmlt", "pssmlt"];
+pub const INTEGRATORS: &[&str] = &["path", "bdpt", "mmlt", "pssmlt", "tempered"];
 
 /// Options shared by the integrators [`create`] makes.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct IntegratorOptions {
     /// Maximum number of scattering events per path (pbrt's `maxdepth`).
     pub max_depth: u32,
@@ -105,6 +106,12 @@ pub struct IntegratorOptions {
     pub bootstrap: usize,
     pub chains: usize,
     pub large_step: Option<f32>,
+    /// Tempered MMLT: replicas per ensemble (0: the default), swap strategy, fixed ladder
+    /// `a_1 … a_{K−1}` (empty: the default) and whether MIS weights use the roughened densities.
+    pub replicas: usize,
+    pub swap: Swap,
+    pub ladder: Vec<f32>,
+    pub keep_mis: bool,
 }
 
 /// The integrator called `name`.
@@ -118,6 +125,19 @@ pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integra
                 bootstrap: if options.bootstrap > 0 { options.bootstrap } else { defaults.bootstrap },
                 chains: if options.chains > 0 { options.chains } else { defaults.chains },
                 large_step_probability: options.large_step.unwrap_or(defaults.large_step_probability),
+                ..defaults
+            }))
+        }
+        "tempered" => {
+            let defaults = TemperedIntegrator::new(d);
+            Some(Box::new(TemperedIntegrator {
+                bootstrap: if options.bootstrap > 0 { options.bootstrap } else { defaults.bootstrap },
+                chains: if options.chains > 0 { options.chains } else { defaults.chains },
+                large_step_probability: options.large_step.unwrap_or(defaults.large_step_probability),
+                replicas: if options.replicas > 0 { options.replicas } else { defaults.replicas },
+                swap: options.swap,
+                ladder: options.ladder.clone(),
+                roughen_mis: !options.keep_mis,
                 ..defaults
             }))
         }

@@ -41,8 +41,9 @@ impl PssmltIntegrator {
             sigma: self.sigma,
             large_step_probability: self.large_step_probability,
         };
+        let target = |_| FullTarget { scene, max_depth: self.max_depth };
         let (mut out, mut report) =
-            chain.render(scene, settings, control, 1, |_| FullTarget { scene, max_depth: self.max_depth })?;
+            chain.render(scene, settings, control, 1, target, |cx| chain.start_single(cx, target(0)))?;
         for d in out.chains.iter_mut().chain(&mut report.depths) {
             d.all_depths = true;
         }

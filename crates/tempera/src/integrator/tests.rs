@@ -142,7 +142,7 @@ fn time_budget_renders_every_pixel_and_cancellation_stops_early() {
 }
 
 /// Per-block means of an image and their standard errors (pixels as independent estimates).
-fn block_stats(img: &crate::texture::Image, block: usize) -> Vec<(f64, f64)> {
+pub(crate) fn block_stats(img: &crate::texture::Image, block: usize) -> Vec<(f64, f64)> {
     let mut out = Vec::new();
     for by in (0..img.height).step_by(block) {
         for bx in (0..img.width).step_by(block) {

@@ -58,17 +58,37 @@ impl<S: State> Chain<S> {
         }
     }
 
-    /// Makes up to `mutations` mutations, checking `stop` every 256; returns how many were made.
+    /// The current state.
+    pub fn state(&self) -> &S {
+        &self.current
+    }
+
+    pub fn state_mut(&mut self) -> &mut S {
+        &mut self.current
+    }
+
+    /// Exchanges the whole states (primary-sample vector with its stamps, and the evaluated
+    /// state) of two chains; each keeps its random numbers for acceptance and its statistics.
+    pub fn exchange(&mut self, other: &mut Chain<S>) {
+        std::mem::swap(&mut self.sampler, &mut other.sampler);
+        std::mem::swap(&mut self.current, &mut other.current);
+    }
+
+    /// Makes up to `mutations` mutations, checking `stop` every 256, splatting into `splats`
+    /// when given; returns how many were made.
     pub fn run(
         &mut self,
         target: &impl Target<State = S>,
         mutations: u64,
-        splats: &mut SplatBuffer,
+        mut splats: Option<&mut SplatBuffer>,
         stop: &dyn Fn() -> bool,
     ) -> u64 {
         let start = std::time::Instant::now();
-        let splat = |splats: &mut SplatBuffer, c: &S, weight: f32| {
-            if weight > 0.0 && c.value() > 0.0 {
+        let splat = |splats: &mut Option<&mut SplatBuffer>, c: &S, weight: f32| {
+            if let Some(splats) = splats
+                && weight > 0.0
+                && c.value() > 0.0
+            {
                 c.splat(splats, weight / c.value());
             }
         };
@@ -91,8 +111,8 @@ impl<S: State> Chain<S> {
                 s.small_steps_proposed += 1;
             }
             let a = if current.value() > 0.0 { (proposal.value() / current.value()).min(1.0) } else { 1.0 };
-            splat(splats, proposal, a);
-            splat(splats, current, 1.0 - a);
+            splat(&mut splats, proposal, a);
+            splat(&mut splats, current, 1.0 - a);
             s.mutations += 1;
             done += 1;
             if self.rng.next_f32() < a {

@@ -21,6 +21,9 @@ pub struct DepthStats {
     /// Proposals whose value was NaN, infinite or negative (counted as zero).
     pub invalid: u64,
     pub seconds: f64,
+    /// Tempered MMLT: the replicas' roughening ladder and what the swaps did.
+    pub ladder: Vec<f32>,
+    pub swaps: Option<SwapStats>,
 }
 
 impl DepthStats {
@@ -33,6 +36,12 @@ impl DepthStats {
         self.technique_changes += o.technique_changes;
         self.invalid += o.invalid;
         self.seconds += o.seconds;
+        if let Some(o) = &o.swaps {
+            self.swaps.get_or_insert_with(|| SwapStats::new(o.replicas)).merge(o);
+        }
+        if self.ladder.is_empty() {
+            self.ladder.clone_from(&o.ladder);
+        }
     }
 
     pub fn acceptance(&self) -> f64 {
@@ -42,5 +51,67 @@ impl DepthStats {
         } else {
             (self.large_steps_accepted + self.small_steps_accepted) as f64 / proposed as f64
         }
+    }
+}
+
+/// What the swap steps did, per ensemble (merged per depth).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SwapStats {
+    /// Replicas in the ensemble.
+    pub replicas: usize,
+    /// Attempts and acceptances per replica pair `(i, j)`, `i < j`, at index `i·K + j`.
+    pub attempts: Vec<u64>,
+    pub accepted: Vec<u64>,
+    /// Swap steps taken.
+    pub steps: u64,
+    /// Equi-energy steps in which no ring held two replicas.
+    pub no_pair: u64,
+    /// Permutation steps that drew a permutation other than the identity, and that gave
+    /// replica 0 another state.
+    pub non_identity: u64,
+    pub main_changed: u64,
+}
+
+impl SwapStats {
+    pub fn new(replicas: usize) -> Self {
+        Self {
+            replicas,
+            attempts: vec![0; replicas * replicas],
+            accepted: vec![0; replicas * replicas],
+            ..Self::default()
+        }
+    }
+
+    pub fn record(&mut self, i: usize, j: usize, accepted: bool) {
+        let (i, j) = (i.min(j), i.max(j));
+        self.attempts[i * self.replicas + j] += 1;
+        self.accepted[i * self.replicas + j] += u64::from(accepted);
+    }
+
+    pub fn merge(&mut self, o: &SwapStats) {
+        if self.replicas == 0 {
+            *self = SwapStats::new(o.replicas);
+        }
+        for (a, b) in self.attempts.iter_mut().zip(&o.attempts) {
+            *a += b;
+        }
+        for (a, b) in self.accepted.iter_mut().zip(&o.accepted) {
+            *a += b;
+        }
+        self.steps += o.steps;
+        self.no_pair += o.no_pair;
+        self.non_identity += o.non_identity;
+        self.main_changed += o.main_changed;
+    }
+
+    /// Acceptance rate of exchanges between neighbours `(i, i + 1)` over all their attempts.
+    pub fn neighbor_acceptance(&self) -> f64 {
+        let k = self.replicas;
+        let (mut attempts, mut accepted) = (0, 0);
+        for i in 0..k.saturating_sub(1) {
+            attempts += self.attempts[i * k + i + 1];
+            accepted += self.accepted[i * k + i + 1];
+        }
+        if attempts == 0 { 0.0 } else { accepted as f64 / attempts as f64 }
     }
 }

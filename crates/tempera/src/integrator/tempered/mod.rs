@@ -14,80 +14,23 @@
 //! - [`Permutation`]: a Gibbs step over all `K!` assignments of states to replicas, drawn with
 //!   probability proportional to `Π_i f_i(u_σ(i))` (always accepted).
 
+mod ensemble;
 mod equi_energy;
+mod integrator;
 mod neighbor;
 mod permutation;
 
 #[cfg(test)]
 mod tests;
 
+pub use ensemble::{Ensemble, apply_permutation};
 pub use equi_energy::EquiEnergy;
+pub use integrator::{Swap, TemperedIntegrator};
 pub use neighbor::Neighbor;
 pub use permutation::Permutation;
 
 use crate::math::rng::Pcg32;
-
-/// What the swap steps did, per ensemble (merged per depth).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SwapStats {
-    /// Replicas in the ensemble.
-    pub replicas: usize,
-    /// Attempts and acceptances per replica pair `(i, j)`, `i < j`, at index `i·K + j`.
-    pub attempts: Vec<u64>,
-    pub accepted: Vec<u64>,
-    /// Swap steps taken.
-    pub steps: u64,
-    /// Equi-energy steps in which no ring held two replicas.
-    pub no_pair: u64,
-    /// Permutation steps that drew a permutation other than the identity, and that gave
-    /// replica 0 another state.
-    pub non_identity: u64,
-    pub main_changed: u64,
-}
-
-impl SwapStats {
-    pub fn new(replicas: usize) -> Self {
-        Self {
-            replicas,
-            attempts: vec![0; replicas * replicas],
-            accepted: vec![0; replicas * replicas],
-            ..Self::default()
-        }
-    }
-
-    fn record(&mut self, i: usize, j: usize, accepted: bool) {
-        let (i, j) = (i.min(j), i.max(j));
-        self.attempts[i * self.replicas + j] += 1;
-        self.accepted[i * self.replicas + j] += u64::from(accepted);
-    }
-
-    pub fn merge(&mut self, o: &SwapStats) {
-        if self.replicas == 0 {
-            *self = SwapStats::new(o.replicas);
-        }
-        for (a, b) in self.attempts.iter_mut().zip(&o.attempts) {
-            *a += b;
-        }
-        for (a, b) in self.accepted.iter_mut().zip(&o.accepted) {
-            *a += b;
-        }
-        self.steps += o.steps;
-        self.no_pair += o.no_pair;
-        self.non_identity += o.non_identity;
-        self.main_changed += o.main_changed;
-    }
-
-    /// Acceptance rate of exchanges between neighbours `(i, i + 1)` over all their attempts.
-    pub fn neighbor_acceptance(&self) -> f64 {
-        let k = self.replicas;
-        let (mut attempts, mut accepted) = (0, 0);
-        for i in 0..k.saturating_sub(1) {
-            attempts += self.attempts[i * k + i + 1];
-            accepted += self.accepted[i * k + i + 1];
-        }
-        if attempts == 0 { 0.0 } else { accepted as f64 / attempts as f64 }
-    }
-}
+pub use crate::mcmc::SwapStats;
 
 /// Cross-evaluations of an ensemble: `f(i, j)` is replica `i`'s target at the state replica `j`
 /// holds. Implementations may compute entries lazily; strategies ask only for what they need.

@@ -186,3 +186,76 @@ fn rings_are_ordered_and_zero_has_its_own() {
         last = r;
     }
 }
+
+#[test]
+fn permutations_apply_in_place() {
+    let mut rng = Pcg32::new(8, 0);
+    for k in 1..7 {
+        for _ in 0..50 {
+            // A random permutation by Fisher–Yates.
+            let mut sigma: Vec<usize> = (0..k).collect();
+            for i in (1..k).rev() {
+                sigma.swap(i, (rng.next_u32() as usize) % (i + 1));
+            }
+            let mut items: Vec<usize> = (0..k).map(|i| 100 + i).collect();
+            apply_permutation(&mut items, &sigma, |v, i, j| v.swap(i, j));
+            for i in 0..k {
+                assert_eq!(items[i], 100 + sigma[i], "{sigma:?}");
+            }
+        }
+    }
+}
+
+mod integrator {
+    use crate::integrator::tests::{block_stats, render_with};
+    use crate::integrator::*;
+    use std::sync::atomic::AtomicBool;
+
+    fn settings(mpp: u32, seed: u64, threads: usize) -> RenderSettings {
+        RenderSettings { budget: Budget::Samples(mpp), seed, threads }
+    }
+
+    #[test]
+    fn one_replica_reproduces_mmlt_exactly() {
+        let mut scene = crate::scenes::default_scene().build().unwrap();
+        scene.set_resolution(16, 16);
+        let cancel = AtomicBool::new(false);
+        let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+        let mmlt = MmltIntegrator { bootstrap: 5_000, chains: 8, ..MmltIntegrator::new(5) };
+        let tempered = TemperedIntegrator { bootstrap: 5_000, chains: 8, replicas: 1, ..TemperedIntegrator::new(5) };
+        let a = mmlt.render(&scene, &settings(16, 3, 0), &control);
+        let b = tempered.render(&scene, &settings(16, 3, 0), &control);
+        assert!(a.image.pixels == b.image.pixels, "replicas = 1 is MMLT bit for bit");
+    }
+
+    #[test]
+    fn every_swap_strategy_agrees_with_bdpt_and_is_deterministic() {
+        let mut scene = crate::scenes::default_scene().build().unwrap();
+        scene.set_resolution(24, 24);
+        let cancel = AtomicBool::new(false);
+        let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+        let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(512), 1, 0);
+        let mean = |img: &crate::texture::Image| {
+            img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64
+        };
+        for swap in [Swap::Neighbor, Swap::EquiEnergy, Swap::Permutation] {
+            let t =
+                TemperedIntegrator { bootstrap: 50_000, chains: 16, replicas: 4, swap, ..TemperedIntegrator::new(5) };
+            let (out, report) = t.render_with_report(&scene, &settings(256, 2, 0), &control).unwrap();
+            let ratio = mean(&out.image) / mean(&bdpt.image);
+            assert!((ratio - 1.0).abs() < 0.03, "{swap:?}: image mean ratio {ratio}");
+            let (a, b) = (block_stats(&out.image, 12), block_stats(&bdpt.image, 12));
+            for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
+                assert!((ma - mb).abs() < 4.0 * sb + 0.1 * mb, "{swap:?} block {i}: {ma} vs {mb} ± {sb}");
+            }
+            let swaps = report.depths[2].swaps.as_ref().expect("depth 2 has an ensemble");
+            let accepted: u64 = swaps.accepted.iter().sum();
+            assert!(swaps.steps > 0 && accepted + swaps.non_identity > 0, "{swap:?}: {swaps:?}");
+            assert_eq!(report.depths[2].ladder.len(), 4);
+            let small =
+                TemperedIntegrator { bootstrap: 2_000, chains: 4, replicas: 3, swap, ..TemperedIntegrator::new(4) };
+            let run = |threads| small.render(&scene, &settings(4, 7, threads), &control).image.pixels;
+            assert!(run(1) == run(2), "{swap:?}: same image at any thread count");
+        }
+    }
+}

@@ -1,0 +1,156 @@
+//! The tempered MMLT integrator: MMLT's driver (bootstrap, budgets, `b_k` refinement,
+//! determinism) with one replica ensemble per chain at every depth `k ≥ 1`; depth 0, whose
+//! only strategy has no connection vertex, runs plain MMLT chains.
+
+use super::ensemble::Ensemble;
+use super::{EquiEnergy, Neighbor, Permutation, SwapStrategy};
+use crate::bidir::{Heuristic, Tempering};
+use crate::integrator::mmlt::{ChainSettings, MmltReport, StartContext, sampler_for};
+use crate::integrator::{Integrator, RenderControl, RenderOutput, RenderSettings, RenderStats};
+use crate::math::rng::{Pcg32, hash};
+use crate::mcmc::{Chain, SwapStats, TemperedTarget};
+use crate::scene::Scene;
+use crate::texture::Image;
+
+/// Which swap strategy the ensembles use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Swap {
+    #[default]
+    Neighbor,
+    EquiEnergy,
+    Permutation,
+}
+
+impl Swap {
+    pub const NAMES: &[&str] = &["neighbor", "equi-energy", "permutation"];
+
+    pub fn parse(name: &str) -> Option<Swap> {
+        match name {
+            "neighbor" => Some(Swap::Neighbor),
+            "equi-energy" => Some(Swap::EquiEnergy),
+            "permutation" => Some(Swap::Permutation),
+            _ => None,
+        }
+    }
+}
+
+/// Rings of the equi-energy strategy.
+const RINGS: usize = 8;
+
+#[derive(Clone, Debug)]
+pub struct TemperedIntegrator {
+    pub max_depth: u32,
+    pub bootstrap: usize,
+    /// Ensembles per depth.
+    pub chains: usize,
+    pub sigma: f32,
+    pub large_step_probability: f32,
+    /// Replicas per ensemble (1: plain MMLT).
+    pub replicas: usize,
+    pub swap: Swap,
+    /// Roughening of replicas `1 … K−1` (`a_0 = 0`); empty: [`Self::default_ladder`].
+    pub ladder: Vec<f32>,
+    /// Recompute MIS weights from the roughened densities.
+    pub roughen_mis: bool,
+}
+
+impl TemperedIntegrator {
+    pub fn new(max_depth: u32) -> Self {
+        Self {
+            max_depth,
+            bootstrap: 20_000,
+            chains: 64,
+            sigma: 0.01,
+            large_step_probability: 0.3,
+            replicas: 5,
+            swap: Swap::Neighbor,
+            ladder: Vec::new(),
+            roughen_mis: true,
+        }
+    }
+
+    /// Geometric spacing from `a_1 = 0.02`, tripling: 0.02, 0.06, 0.18, 0.54, …
+    pub fn default_ladder(replicas: usize) -> Vec<f32> {
+        (1..replicas).map(|j| 0.02 * 3f32.powi(j as i32 - 1)).collect()
+    }
+
+    /// `a_0 = 0` followed by the ladder.
+    pub fn ladder(&self) -> Vec<f32> {
+        let rest = if self.ladder.is_empty() { Self::default_ladder(self.replicas) } else { self.ladder.clone() };
+        std::iter::once(0.0).chain(rest).take(self.replicas.max(1)).collect()
+    }
+
+    fn chain_settings(&self) -> ChainSettings {
+        ChainSettings {
+            bootstrap: self.bootstrap,
+            chains: self.chains,
+            sigma: self.sigma,
+            large_step_probability: self.large_step_probability,
+        }
+    }
+
+    /// Renders and returns the per-depth statistics (with ladders and swap statistics).
+    pub fn render_with_report(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> Result<(RenderOutput, MmltReport), String> {
+        let chains = self.chain_settings();
+        let ladder = self.ladder();
+        let temper = |a| Tempering { a, heuristic: Heuristic::Power, roughen_mis: self.roughen_mis };
+        let main = |depth| TemperedTarget { scene, depth, temper: temper(0.0) };
+        let depths = self.max_depth as usize + 1;
+        chains.render(scene, settings, control, depths, main, |cx: StartContext| {
+            let StartContext { k, c, seed, rng, starts, bootstrap } = cx;
+            let ladder: &[f32] = if k == 0 { &ladder[..1] } else { &ladder };
+            let strategy: Box<dyn SwapStrategy> = match self.swap {
+                Swap::Neighbor => Box::new(Neighbor),
+                Swap::EquiEnergy => Box::new(EquiEnergy::from_samples(bootstrap, RINGS)),
+                Swap::Permutation => Box::new(Permutation),
+            };
+            // Replica 0 starts exactly as an MMLT chain; the others draw their own start states.
+            let mut replicas = Vec::with_capacity(ladder.len());
+            let mut targets = Vec::with_capacity(ladder.len());
+            for (j, &a) in ladder.iter().enumerate() {
+                let target = TemperedTarget { scene, depth: k, temper: temper(a) };
+                let mut rng =
+                    if j == 0 { rng.clone() } else { Pcg32::new(hash(&[seed, 0x7e4b, k as u64, c as u64]), j as u64) };
+                let (index, _, _) = starts.sample_discrete(rng.next_f32());
+                replicas.push(Chain::start(&target, sampler_for(seed, k, index, &chains), rng, k));
+                targets.push(target);
+            }
+            Ensemble {
+                replicas,
+                targets,
+                strategy,
+                rng: Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11),
+                swaps: SwapStats::new(ladder.len()),
+            }
+        })
+    }
+}
+
+impl Integrator for TemperedIntegrator {
+    fn name(&self) -> &'static str {
+        "tempered"
+    }
+
+    fn try_render(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> Result<RenderOutput, String> {
+        self.render_with_report(scene, settings, control).map(|(out, _)| out)
+    }
+
+    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
+        self.try_render(scene, settings, control).unwrap_or_else(|_| RenderOutput {
+            image: Image::filled(scene.film.width as usize, scene.film.height as usize, crate::math::Rgb::ZERO),
+            stats: RenderStats::default(),
+            layers: Vec::new(),
+            chains: Vec::new(),
+        })
+    }
+}
