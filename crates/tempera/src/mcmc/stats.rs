@@ -21,8 +21,10 @@ pub struct DepthStats {
     /// Proposals whose value was NaN, infinite or negative (counted as zero).
     pub invalid: u64,
     pub seconds: f64,
-    /// Tempered MMLT: the replicas' roughening ladder and what the swaps did.
+    /// Tempered MMLT: the replicas' roughening ladder (the mean over the depth's ensembles,
+    /// `ladder_ensembles` of them) and what the swaps did.
     pub ladder: Vec<f32>,
+    pub ladder_ensembles: u64,
     pub swaps: Option<SwapStats>,
 }
 
@@ -39,8 +41,16 @@ impl DepthStats {
         if let Some(o) = &o.swaps {
             self.swaps.get_or_insert_with(|| SwapStats::new(o.replicas)).merge(o);
         }
-        if self.ladder.is_empty() {
-            self.ladder.clone_from(&o.ladder);
+        if !o.ladder.is_empty() {
+            if self.ladder.len() != o.ladder.len() {
+                self.ladder = vec![0.0; o.ladder.len()];
+                self.ladder_ensembles = 0;
+            }
+            let (n, m) = (self.ladder_ensembles as f64, o.ladder_ensembles.max(1) as f64);
+            for (a, b) in self.ladder.iter_mut().zip(&o.ladder) {
+                *a = ((f64::from(*a) * n + f64::from(*b) * m) / (n + m)) as f32;
+            }
+            self.ladder_ensembles += o.ladder_ensembles.max(1);
         }
     }
 

@@ -1,8 +1,17 @@
 //! One ensemble of replicas of a path depth: sweeps of one mutation per replica, each followed
 //! by a swap step. Replica 0 holds the scene's BSDFs and alone splats; its mutations are the
 //! ensemble's mutations in budgets and statistics.
+//!
+//! Ladder tuning: during a burn-in of `sweeps` sweeps (splats discarded, statistics reset
+//! afterwards) the gaps `a_j − a_{j−1}` follow a Robbins–Monro recursion on their logarithm,
+//! `ln g_j += γ_n (α_j − α*)` with `γ_n = (1 + n/10)^−0.6`, where `α_j` is the acceptance
+//! probability of exchanging replicas `j − 1` and `j` (whatever the swap strategy) and `α*`
+//! the target (0.234). Wider gaps lower the acceptance, so the recursion settles where the
+//! neighbour acceptance averages `α*`; the ladder is then frozen. Gaps are capped at `1/(K−1)`:
+//! beyond `a = 1` roughening changes nothing, and on scenes whose connections are mostly
+//! diffuse the acceptance stays above `α*` even at the cap.
 
-use super::{CrossValues, SwapStrategy};
+use super::{CrossValues, SwapStrategy, swap_acceptance};
 use crate::film::SplatBuffer;
 use crate::integrator::mmlt::Walker;
 use crate::math::rng::Pcg32;
@@ -14,6 +23,19 @@ pub struct Ensemble<'a> {
     pub strategy: Box<dyn SwapStrategy>,
     pub rng: Pcg32,
     pub swaps: SwapStats,
+    /// Ladder tuning still to do, if any.
+    pub tuning: Option<Tuning>,
+}
+
+/// The state of the ladder's burn-in.
+#[derive(Clone, Debug)]
+pub struct Tuning {
+    /// Burn-in sweeps left.
+    pub sweeps: u64,
+    /// Target neighbour acceptance.
+    pub target: f64,
+    /// Sweeps done.
+    pub n: u64,
 }
 
 /// Lazily computed cross-evaluations `f_i(u_j)` of an ensemble.
@@ -88,8 +110,65 @@ impl Ensemble<'_> {
     }
 }
 
+impl Ensemble<'_> {
+    /// Burn-in sweeps that tune the ladder; returns false when stopped early.
+    fn tune(&mut self, stop: &dyn Fn() -> bool) -> bool {
+        let Some(mut tuning) = self.tuning.take() else { return true };
+        let k = self.replicas.len();
+        let never = || false;
+        let mut log_gaps: Vec<f64> =
+            (1..k).map(|j| f64::from(self.targets[j].temper.a - self.targets[j - 1].temper.a).max(1e-6).ln()).collect();
+        while tuning.sweeps > 0 {
+            if tuning.n % 64 == 0 && stop() {
+                self.discard_statistics();
+                return false;
+            }
+            for (chain, target) in self.replicas.iter_mut().zip(&self.targets) {
+                chain.run(target, 1, None, &never);
+            }
+            let gamma = (1.0 + tuning.n as f64 / 10.0).powf(-0.6);
+            let alphas: Vec<f64> = {
+                let mut cross = Cross { ensemble: self, cache: vec![None; k * k] };
+                (1..k).map(|j| swap_acceptance(&mut cross, j - 1, j)).collect()
+            };
+            // Roughening saturates at α = 1 (a = 1 flattens every lobe completely), so gaps
+            // stay below 1/(K−1) and the ladder within (0, 1].
+            let max_gap = (1.0 / (k - 1) as f64).ln();
+            for (g, alpha) in log_gaps.iter_mut().zip(&alphas) {
+                *g = (*g + gamma * (alpha - tuning.target)).clamp(1e-5f64.ln(), max_gap);
+            }
+            let mut a = 0.0f64;
+            for (j, g) in log_gaps.iter().enumerate() {
+                a += g.exp();
+                self.targets[j + 1].temper.a = a as f32;
+            }
+            for j in 1..k {
+                let value = self.targets[j].value_of(self.replicas[j].state_mut());
+                self.replicas[j].state_mut().value = value;
+            }
+            self.swap();
+            tuning.sweeps -= 1;
+            tuning.n += 1;
+        }
+        self.discard_statistics();
+        true
+    }
+
+    /// Burn-in statistics are discarded with its splats.
+    fn discard_statistics(&mut self) {
+        for chain in &mut self.replicas {
+            chain.stats = DepthStats { depth: chain.stats.depth, ..DepthStats::default() };
+            chain.large = (0.0, 0.0, 0);
+        }
+        self.swaps = SwapStats::new(self.replicas.len());
+    }
+}
+
 impl Walker for Ensemble<'_> {
     fn run(&mut self, mutations: u64, splats: &mut SplatBuffer, stop: &dyn Fn() -> bool) -> u64 {
+        if !self.tune(stop) {
+            return 0;
+        }
         if self.replicas.len() == 1 {
             return self.replicas[0].run(&self.targets[0], mutations, Some(splats), stop);
         }
@@ -111,6 +190,7 @@ impl Walker for Ensemble<'_> {
     fn stats(&self) -> DepthStats {
         let mut stats = self.replicas[0].stats.clone();
         stats.ladder = self.targets.iter().map(|t| t.temper.a).collect();
+        stats.ladder_ensembles = 1;
         stats.swaps = (self.replicas.len() > 1).then(|| self.swaps.clone());
         stats
     }

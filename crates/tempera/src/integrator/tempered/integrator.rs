@@ -2,7 +2,7 @@
 //! determinism) with one replica ensemble per chain at every depth `k ≥ 1`; depth 0, whose
 //! only strategy has no connection vertex, runs plain MMLT chains.
 
-use super::ensemble::Ensemble;
+use super::ensemble::{Ensemble, Tuning};
 use super::{EquiEnergy, Neighbor, Permutation, SwapStrategy};
 use crate::bidir::{Heuristic, Tempering};
 use crate::integrator::mmlt::{ChainSettings, MmltReport, StartContext, sampler_for};
@@ -48,10 +48,15 @@ pub struct TemperedIntegrator {
     /// Replicas per ensemble (1: plain MMLT).
     pub replicas: usize,
     pub swap: Swap,
-    /// Roughening of replicas `1 … K−1` (`a_0 = 0`); empty: [`Self::default_ladder`].
+    /// Roughening of replicas `1 … K−1` (`a_0 = 0`), fixed; empty: [`Self::default_ladder`],
+    /// tuned during the burn-in.
     pub ladder: Vec<f32>,
     /// Recompute MIS weights from the roughened densities.
     pub roughen_mis: bool,
+    /// Burn-in sweeps per ensemble that tune the ladder (without a fixed ladder; 0: no tuning).
+    pub burn_in: u64,
+    /// Neighbour-swap acceptance the tuning aims at.
+    pub swap_target: f64,
 }
 
 impl TemperedIntegrator {
@@ -66,6 +71,8 @@ impl TemperedIntegrator {
             swap: Swap::Neighbor,
             ladder: Vec::new(),
             roughen_mis: true,
+            burn_in: 500,
+            swap_target: 0.234,
         }
     }
 
@@ -126,6 +133,11 @@ impl TemperedIntegrator {
                 strategy,
                 rng: Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11),
                 swaps: SwapStats::new(ladder.len()),
+                tuning: (self.ladder.is_empty() && self.burn_in > 0 && ladder.len() > 1).then_some(Tuning {
+                    sweeps: self.burn_in,
+                    target: self.swap_target,
+                    n: 0,
+                }),
             }
         })
     }
