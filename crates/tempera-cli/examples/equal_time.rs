@@ -1,12 +1,18 @@
 //! Equal-time comparison of the path tracer, BDPT, MMLT and PSSMLT against a long BDPT reference, printing
 //! relMSE = mean((I − R)² / (R² + ε)) on luminance with ε = 0.01.
 //!
-//! `cargo run --release --example equal_time -- [SCENE] [SECONDS] [REFERENCE_SPP] [SIZE]`
+//! `cargo run --release --example equal_time -- [SCENE] [SECONDS] [REFERENCE_SPP] [SIZE] [SEEDS] [METHODS]`
+//!
+//! `METHODS` is a comma-separated list of `path`, `bdpt`, `mmlt`, `pssmlt`,
+//! `tempered-neighbor`, `tempered-equi-energy`, `tempered-permutation` (default: the first
+//! four); each runs with seeds `1 … SEEDS` (default 2), and the mean and spread of relMSE over
+//! seeds are printed with the swap acceptance reached.
 
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 use tempera::integrator::{
-    BdptIntegrator, Budget, Integrator, MmltIntegrator, PathIntegrator, PssmltIntegrator, RenderControl, RenderSettings,
+    BdptIntegrator, Budget, Integrator, MmltIntegrator, PathIntegrator, PssmltIntegrator, RenderControl,
+    RenderSettings, Swap, TemperedIntegrator,
 };
 use tempera::math::luminance;
 use tempera::texture::Image;
@@ -54,21 +60,43 @@ fn main() -> anyhow::Result<()> {
         reference.stats.seconds
     );
     let budget = Budget::Time(Duration::from_secs_f64(seconds));
-    for (name, integrator) in [
-        ("path", &PathIntegrator::new(depth) as &dyn Integrator),
-        ("bdpt", &BdptIntegrator::new(depth) as &dyn Integrator),
-        ("mmlt", &MmltIntegrator::new(depth) as &dyn Integrator),
-        ("pssmlt", &PssmltIntegrator::new(depth) as &dyn Integrator),
-    ] {
-        for seed in 1..=2 {
-            let out = render(integrator, budget, seed);
+    let seeds: u64 = args.get(4).map_or(Ok(2), |s| s.parse())?;
+    let methods = args.get(5).map_or("path,bdpt,mmlt,pssmlt", |s| s.as_str());
+    for name in methods.split(',') {
+        let integrator: Box<dyn Integrator> = match name {
+            "path" => Box::new(PathIntegrator::new(depth)),
+            "bdpt" => Box::new(BdptIntegrator::new(depth)),
+            "mmlt" => Box::new(MmltIntegrator::new(depth)),
+            "pssmlt" => Box::new(PssmltIntegrator::new(depth)),
+            other => match other.strip_prefix("tempered-").and_then(Swap::parse) {
+                Some(swap) => Box::new(TemperedIntegrator { swap, ..TemperedIntegrator::new(depth) }),
+                None => anyhow::bail!("unknown method '{other}'"),
+            },
+        };
+        let mut errors = Vec::new();
+        for seed in 1..=seeds {
+            let out = render(integrator.as_ref(), budget, seed);
             let spp = out.stats.pixel_samples as f64 / f64::from(scene.film.width * scene.film.height);
+            let e = rel_mse(&out.image, &reference.image);
+            let swaps: Vec<String> = out
+                .chains
+                .iter()
+                .filter_map(|d| d.swaps.as_ref().map(|s| format!("{:.2}", s.neighbor_acceptance())))
+                .collect();
+            let swaps = if swaps.is_empty() {
+                String::new()
+            } else {
+                format!(", neighbour acceptance per depth {}", swaps.join(" "))
+            };
             println!(
-                "{name:6} seed {seed}: {spp:7.1} samples or mutations per pixel in {:.1} s, relMSE {:.5}",
-                out.stats.seconds,
-                rel_mse(&out.image, &reference.image)
+                "{name:22} seed {seed}: {spp:7.1} samples or mutations per pixel in {:.1} s, relMSE {e:.5}{swaps}",
+                out.stats.seconds
             );
+            errors.push(e);
         }
+        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+        let (lo, hi) = errors.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &e| (lo.min(e), hi.max(e)));
+        println!("{name:22} relMSE mean {mean:.5}, min {lo:.5}, max {hi:.5} over {seeds} seeds");
     }
     Ok(())
 }
