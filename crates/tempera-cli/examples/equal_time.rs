@@ -4,8 +4,8 @@
 //! `cargo run --release --example equal_time -- [SCENE] [SECONDS] [REFERENCE_SPP] [SIZE] [SEEDS] [METHODS]`
 //!
 //! `METHODS` is a comma-separated list of `path`, `bdpt`, `mmlt`, `pssmlt`,
-//! `tempered-neighbor`, `tempered-equi-energy`, `tempered-permutation` (default: the first
-//! four); each runs with seeds `1 … SEEDS` (default 2), and the mean and spread of relMSE over
+//! `tempered-neighbor`, `tempered-equi-energy`, `tempered-permutation`, each optionally with
+//! `+original-mis` (untempered MIS weights in the tempered targets) (default: the first four); each runs with seeds `1 … SEEDS` (default 2), and the mean and spread of relMSE over
 //! seeds are printed with the swap acceptance reached.
 
 use std::sync::atomic::AtomicBool;
@@ -68,10 +68,21 @@ fn main() -> anyhow::Result<()> {
             "bdpt" => Box::new(BdptIntegrator::new(depth)),
             "mmlt" => Box::new(MmltIntegrator::new(depth)),
             "pssmlt" => Box::new(PssmltIntegrator::new(depth)),
-            other => match other.strip_prefix("tempered-").and_then(Swap::parse) {
-                Some(swap) => Box::new(TemperedIntegrator { swap, ..TemperedIntegrator::new(depth) }),
-                None => anyhow::bail!("unknown method '{other}'"),
-            },
+            other => {
+                // `tempered-SWAP`, optionally `+original-mis` (untempered MIS weights).
+                let (base, original_mis) = match other.strip_suffix("+original-mis") {
+                    Some(base) => (base, true),
+                    None => (other, false),
+                };
+                match base.strip_prefix("tempered-").and_then(Swap::parse) {
+                    Some(swap) => Box::new(TemperedIntegrator {
+                        swap,
+                        roughen_mis: !original_mis,
+                        ..TemperedIntegrator::new(depth)
+                    }),
+                    None => anyhow::bail!("unknown method '{other}'"),
+                }
+            }
         };
         let mut errors = Vec::new();
         for seed in 1..=seeds {
