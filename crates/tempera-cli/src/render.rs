@@ -81,6 +81,13 @@ pub struct RenderArgs {
     /// Tempered MMLT: fixed roughening ladder a1,a2,… of replicas 1 … K−1 (increasing, positive).
     #[arg(long, value_parser = parse_ladder)]
     pub ladder: Option<Ladder>,
+    /// Tempered MMLT: burn-in sweeps per ensemble that tune the ladder (0: keep the default
+    /// ladder untuned; ignored with --ladder).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=10_000_000))]
+    pub burn_in: Option<u64>,
+    /// Tempered MMLT: neighbour-swap acceptance the ladder tuning aims at.
+    #[arg(long, value_parser = parse_probability)]
+    pub swap_target: Option<f32>,
     /// Tempered MMLT: MIS weights of tempered replicas from the roughened or the original
     /// densities.
     #[arg(long, default_value = "roughened", value_parser = ["roughened", "original"])]
@@ -240,6 +247,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
         swap: tempera::integrator::Swap::parse(&args.swap).unwrap_or_default(),
         ladder: args.ladder.as_ref().map_or_else(Vec::new, |l| l.0.clone()),
         keep_mis: args.tempered_mis == "original",
+        burn_in: args.burn_in,
+        swap_target: args.swap_target.map(f64::from),
     };
     let integrator = integrator::create(&name, &options).with_context(|| format!("unknown integrator '{name}'"))?;
     let budget = match args.time {

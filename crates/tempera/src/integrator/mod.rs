@@ -112,6 +112,10 @@ pub struct IntegratorOptions {
     pub swap: Swap,
     pub ladder: Vec<f32>,
     pub keep_mis: bool,
+    /// Tempered MMLT: burn-in sweeps that tune the ladder and the acceptance they aim at
+    /// (`None`: the integrator's defaults).
+    pub burn_in: Option<u64>,
+    pub swap_target: Option<f64>,
 }
 
 /// The integrator called `name`.
@@ -138,6 +142,8 @@ pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integra
                 swap: options.swap,
                 ladder: options.ladder.clone(),
                 roughen_mis: !options.keep_mis,
+                burn_in: options.burn_in.unwrap_or(defaults.burn_in),
+                swap_target: options.swap_target.unwrap_or(defaults.swap_target),
                 ..defaults
             }))
         }

@@ -259,3 +259,63 @@ mod integrator {
         }
     }
 }
+
+mod tuning {
+    use crate::camera::CameraDesc;
+    use crate::film::FilmDesc;
+    use crate::integrator::*;
+    use crate::material::{ConductorFresnel, ConductorMaterial, Material, Roughness};
+    use crate::math::{Rgb, Vec3};
+    use crate::scene::{AreaEmission, Scene, SceneBuilder};
+    use crate::scenes::quad;
+    use std::sync::atomic::AtomicBool;
+
+    /// A glossy floor and back wall (GGX α = 0.08) under a small light: every connection of
+    /// depth 2 joins two glossy vertices, so tempered targets differ and the tuning has work.
+    fn glossy_corner() -> Scene {
+        let mut b = SceneBuilder::new();
+        let metal = b.add_material(Material::Conductor(ConductorMaterial {
+            fresnel: ConductorFresnel::Ior {
+                eta: Rgb::new(1.657, 0.880, 0.521).into(),
+                k: Rgb::new(9.2, 6.3, 4.8).into(),
+            },
+            roughness: Roughness::alpha(0.08),
+            tint: 1.0.into(),
+        }));
+        let black = b.add_material(Material::diffuse(Rgb::ZERO));
+        let v = Vec3::new;
+        b.add_shape(quad(v(-1., 0., -1.), v(-1., 0., 1.), v(1., 0., 1.), v(1., 0., -1.)), metal, None);
+        b.add_shape(quad(v(-1., 0., -1.), v(1., 0., -1.), v(1., 2., -1.), v(-1., 2., -1.)), metal, None);
+        let light = quad(v(-0.3, 1.99, -0.3), v(0.3, 1.99, -0.3), v(0.3, 1.99, 0.3), v(-0.3, 1.99, 0.3));
+        b.add_shape(
+            light,
+            black,
+            Some(AreaEmission { radiance: Rgb::splat(10.0).into(), scale: 1.0, two_sided: false }),
+        );
+        b.set_camera(CameraDesc::look_at(v(0.0, 1.0, 3.9), v(0.0, 1.0, 0.0), Vec3::Y, 38.0));
+        b.set_film(FilmDesc { width: 16, height: 16, ..FilmDesc::default() });
+        b.build().unwrap()
+    }
+
+    #[test]
+    fn the_burn_in_widens_the_ladder_while_acceptance_is_above_the_target() {
+        let scene = glossy_corner();
+        let cancel = AtomicBool::new(false);
+        let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+        let run = |burn_in| {
+            let t =
+                TemperedIntegrator { bootstrap: 20_000, chains: 8, replicas: 4, burn_in, ..TemperedIntegrator::new(3) };
+            let settings = RenderSettings { budget: Budget::Samples(16), seed: 5, threads: 0 };
+            let (_, report) = t.render_with_report(&scene, &settings, &control).unwrap();
+            let d = &report.depths[2];
+            (d.swaps.as_ref().unwrap().neighbor_acceptance(), d.ladder.clone())
+        };
+        let (untuned, default_ladder) = run(0);
+        let (tuned, ladder) = run(3000);
+        // The recursion widens the gaps while acceptance is above the target. On this scene it
+        // reaches the cap a_{K-1} = 1 before the target: the acceptance falls, but not to 0.234.
+        assert!(untuned > 0.5 && tuned < untuned - 0.05, "untuned {untuned} {default_ladder:?}, tuned {tuned}");
+        assert!(ladder[1] > 10.0 * default_ladder[1], "{ladder:?}");
+        assert!(ladder.windows(2).all(|w| w[1] > w[0]) && *ladder.last().unwrap() <= 1.0, "{ladder:?}");
+    }
+}
