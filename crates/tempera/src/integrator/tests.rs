@@ -28,7 +28,7 @@ pub(crate) fn mean_and_se(values: &[f64]) -> (f64, f64) {
 }
 
 /// Pixels whose four corners all hit (`true`) or all miss (`false`) the unit sphere at the origin.
-fn classify_furnace_pixels(scene: &Scene) -> (Vec<usize>, Vec<usize>) {
+pub(crate) fn classify_furnace_pixels(scene: &Scene) -> (Vec<usize>, Vec<usize>) {
     let (w, h) = (scene.film.width, scene.film.height);
     let hits = |x: f32, y: f32| {
         let ray: Ray = scene.camera.generate_ray(Vec2::new(x, y), Vec2::splat(0.5));

@@ -207,7 +207,7 @@ fn permutations_apply_in_place() {
 }
 
 mod integrator {
-    use crate::integrator::tests::{block_stats, render_with};
+    use crate::integrator::tests::{block_stats, classify_furnace_pixels, render_with};
     use crate::integrator::*;
     use std::sync::atomic::AtomicBool;
 
@@ -226,6 +226,38 @@ mod integrator {
         let a = mmlt.render(&scene, &settings(16, 3, 0), &control);
         let b = tempered.render(&scene, &settings(16, 3, 0), &control);
         assert!(a.image.pixels == b.image.pixels, "replicas = 1 is MMLT bit for bit");
+    }
+
+    /// On a diffuse Cornell box every replica's target equals the main one, so almost every
+    /// swap is accepted: states change replicas all the time, and the image must not notice.
+    /// The furnace checks the absolute level.
+    #[test]
+    fn every_swap_strategy_agrees_with_bdpt_on_a_cornell_box_and_the_furnace() {
+        let cornell = crate::scenes::cornell_box(32, 32).build().unwrap();
+        let furnace = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
+        let cancel = AtomicBool::new(false);
+        let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+        let bdpt = render_with(&cornell, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
+        let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
+        for swap in [Swap::Neighbor, Swap::EquiEnergy, Swap::Permutation] {
+            let t =
+                TemperedIntegrator { bootstrap: 100_000, chains: 16, replicas: 3, swap, ..TemperedIntegrator::new(5) };
+            let (out, report) = t.render_with_report(&cornell, &settings(512, 2, 0), &control).unwrap();
+            let (a, b) = (block_stats(&out.image, 16), block_stats(&bdpt.image, 16));
+            assert!((mean(&a) / mean(&b) - 1.0).abs() < 0.01, "{swap:?}: image means {} vs {}", mean(&a), mean(&b));
+            for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
+                assert!((ma - mb).abs() < 4.0 * sb + 0.03 * mb, "{swap:?} block {i}: {ma} vs {mb} ± {sb}");
+            }
+            let swaps = report.depths[1].swaps.as_ref().unwrap();
+            let exchanged: u64 = swaps.accepted.iter().sum::<u64>() + swaps.non_identity;
+            assert!(exchanged > swaps.steps / 2, "{swap:?}: states move between replicas: {swaps:?}");
+            let (out, _) = t.render_with_report(&furnace, &settings(128, 3, 0), &control).unwrap();
+            let (sphere, sky) = classify_furnace_pixels(&furnace);
+            let m =
+                |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
+            assert!((m(&sphere) - 0.8).abs() < 0.01, "{swap:?}: furnace sphere {}", m(&sphere));
+            assert!((m(&sky) - 1.0).abs() < 0.01, "{swap:?}: furnace sky {}", m(&sky));
+        }
     }
 
     #[test]
