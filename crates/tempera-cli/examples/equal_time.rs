@@ -14,22 +14,10 @@ use tempera::integrator::{
     BdptIntegrator, Budget, Integrator, MmltIntegrator, PathIntegrator, PssmltIntegrator, RenderControl,
     RenderSettings, Swap, TemperedIntegrator,
 };
-use tempera::math::luminance;
 use tempera::texture::Image;
 
-const EPSILON: f64 = 0.01;
-
 fn rel_mse(image: &Image, reference: &Image) -> f64 {
-    let sum: f64 = image
-        .pixels
-        .iter()
-        .zip(&reference.pixels)
-        .map(|(i, r)| {
-            let (i, r) = (f64::from(luminance(*i)), f64::from(luminance(*r)));
-            (i - r).powi(2) / (r * r + EPSILON)
-        })
-        .sum();
-    sum / image.pixels.len() as f64
+    tempera_image::metrics::compare(image, reference).map_or(f64::NAN, |c| c.relmse)
 }
 
 fn main() -> anyhow::Result<()> {

@@ -1,5 +1,6 @@
 //! The `tempera` command-line renderer: one module per subcommand.
 
+mod compare;
 mod info;
 mod render;
 mod scene;
@@ -21,6 +22,8 @@ enum Command {
     Render(Box<render::RenderArgs>),
     /// Describe what a scene file contains once loaded.
     Info(info::InfoArgs),
+    /// Compare an image with a reference: MSE, RMSE, relMSE, SMAPE, ratio of means, error map.
+    Compare(compare::CompareArgs),
 }
 
 fn main() -> ExitCode {
@@ -28,6 +31,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render::run(*args),
         Command::Info(args) => info::run(args),
+        Command::Compare(args) => compare::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -224,3 +224,29 @@ fn tempered_renders_with_every_swap_strategy_and_reports_swaps() {
         .unwrap();
     assert!(!mismatch.status.success() && stderr(&mismatch).contains("--replicas must be 3"), "{}", stderr(&mismatch));
 }
+
+#[test]
+fn compare_prints_metrics_and_writes_an_error_map() {
+    let dir = scratch("compare");
+    for (name, spp, res) in [("a.exr", "2", "16x16"), ("r.pfm", "32", "16x16"), ("small.exr", "1", "8x8")] {
+        let out = tempera()
+            .current_dir(&dir)
+            .args(["render", "--spp", spp, "--resolution", res, "--maxdepth", "3", "-q", "-o", name])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let out = tempera().current_dir(&dir).args(["compare", "a.exr", "r.pfm", "--error-map", "e.png"]).output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    for key in ["mse", "rmse", "relmse", "smape", "mean ratio"] {
+        assert!(text.contains(key), "{key} missing: {text}");
+    }
+    assert!(dir.join("e.png").exists());
+    let same = tempera().current_dir(&dir).args(["compare", "r.pfm", "r.pfm", "--metric", "relmse"]).output().unwrap();
+    let text = String::from_utf8_lossy(&same.stdout);
+    assert!(text.contains("relmse  0.000000e0") && text.contains("mean ratio 1.000000"), "{text}");
+    assert!(!text.contains("smape"), "only the requested metric: {text}");
+    let mismatch = tempera().current_dir(&dir).args(["compare", "a.exr", "small.exr"]).output().unwrap();
+    assert!(!mismatch.status.success() && stderr(&mismatch).contains("16x16 but the reference is 8x8"));
+}

@@ -3,6 +3,7 @@
 //! sRGB transfer functions. Formats are chosen by file extension.
 
 mod color;
+pub mod metrics;
 mod pfm;
 
 pub use color::{ColorEncoding, linear_to_srgb, srgb_to_linear};
