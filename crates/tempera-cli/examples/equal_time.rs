@@ -5,7 +5,8 @@
 //!
 //! `METHODS` is a comma-separated list of `path`, `bdpt`, `mmlt`, `pssmlt`,
 //! `tempered-neighbor`, `tempered-equi-energy`, `tempered-permutation`, each optionally with
-//! `+original-mis` (untempered MIS weights in the tempered targets) (default: the first four); each runs with seeds `1 … SEEDS` (default 2), and the mean and spread of relMSE over
+//! `+original-mis` (untempered MIS weights in the tempered targets) and `+no-burn-in` (the
+//! default ladder, untuned) (default: the first four); each runs with seeds `1 … SEEDS` (default 2), and the mean and spread of relMSE over
 //! seeds are printed with the swap acceptance reached.
 
 use std::sync::atomic::AtomicBool;
@@ -57,15 +58,16 @@ fn main() -> anyhow::Result<()> {
             "mmlt" => Box::new(MmltIntegrator::new(depth)),
             "pssmlt" => Box::new(PssmltIntegrator::new(depth)),
             other => {
-                // `tempered-SWAP`, optionally `+original-mis` (untempered MIS weights).
-                let (base, original_mis) = match other.strip_suffix("+original-mis") {
-                    Some(base) => (base, true),
-                    None => (other, false),
-                };
+                // `tempered-SWAP`, optionally with `+original-mis` (untempered MIS weights) and
+                // `+no-burn-in` (the default ladder, untuned).
+                let mut parts = other.split('+');
+                let base = parts.next().unwrap_or_default();
+                let options: Vec<&str> = parts.collect();
                 match base.strip_prefix("tempered-").and_then(Swap::parse) {
                     Some(swap) => Box::new(TemperedIntegrator {
                         swap,
-                        roughen_mis: !original_mis,
+                        roughen_mis: !options.contains(&"original-mis"),
+                        burn_in: if options.contains(&"no-burn-in") { 0 } else { 500 },
                         ..TemperedIntegrator::new(depth)
                     }),
                     None => anyhow::bail!("unknown method '{other}'"),
