@@ -8,7 +8,7 @@
 //! image brightness does not hinge on the bootstrap. Chains are the unit of parallel work and
 //! splat into per-thread fixed-point buffers: the image is bit-identical at any thread count.
 
-use super::{Budget, Integrator, RenderControl, RenderOutput, RenderSettings, RenderStats};
+use super::{Budget, ChainIntegrator, RenderControl, RenderOutput, RenderSettings, RenderStats};
 use crate::film::SplatBuffer;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::{Pcg32, hash};
@@ -116,6 +116,10 @@ where
 }
 
 impl ChainSettings {
+    pub fn new(bootstrap: usize, chains: usize, sigma: f32, large_step_probability: f32) -> Self {
+        Self { bootstrap, chains, sigma, large_step_probability }
+    }
+
     /// Starts a single chain from a bootstrap state drawn in proportion to its value.
     pub(super) fn start_single<T: Target>(&self, cx: StartContext, target: T) -> Single<T> {
         let mut rng = cx.rng;
@@ -356,56 +360,24 @@ impl ChainSettings {
     }
 }
 
-impl MmltIntegrator {
-    fn chain_settings(&self) -> ChainSettings {
-        ChainSettings {
-            bootstrap: self.bootstrap,
-            chains: self.chains,
-            sigma: self.sigma,
-            large_step_probability: self.large_step_probability,
-        }
+impl ChainIntegrator for MmltIntegrator {
+    fn name(&self) -> &'static str {
+        "mmlt"
     }
 
     /// Renders and returns the per-depth statistics alongside the image.
-    pub fn render_with_report(
+    fn render_with_report(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<(RenderOutput, MmltReport), String> {
         let depths = self.max_depth as usize + 1;
-        let chains = self.chain_settings();
+        let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.k;
             chains.start_single(cx, target(k))
         })
-    }
-}
-
-impl Integrator for MmltIntegrator {
-    fn name(&self) -> &'static str {
-        "mmlt"
-    }
-
-    fn try_render(
-        &self,
-        scene: &Scene,
-        settings: &RenderSettings,
-        control: &RenderControl,
-    ) -> Result<RenderOutput, String> {
-        self.render_with_report(scene, settings, control).map(|(out, _)| out)
-    }
-
-    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
-        match self.render_with_report(scene, settings, control) {
-            Ok((out, _)) => out,
-            Err(_) => RenderOutput {
-                image: Image::filled(scene.film.width as usize, scene.film.height as usize, crate::math::Rgb::ZERO),
-                stats: RenderStats::default(),
-                layers: Vec::new(),
-                chains: Vec::new(),
-            },
-        }
     }
 }

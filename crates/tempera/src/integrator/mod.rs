@@ -69,6 +69,19 @@ pub struct RenderOutput {
     pub chains: Vec<crate::mcmc::DepthStats>,
 }
 
+impl RenderOutput {
+    /// A black image of the scene's film size with empty statistics: what `render` returns
+    /// when a render cannot be made (`try_render` says why).
+    pub fn black(scene: &Scene) -> Self {
+        RenderOutput {
+            image: Image::filled(scene.film.width as usize, scene.film.height as usize, crate::math::Rgb::ZERO),
+            stats: RenderStats::default(),
+            layers: Vec::new(),
+            chains: Vec::new(),
+        }
+    }
+}
+
 /// A light-transport algorithm.
 pub trait Integrator: Send + Sync {
     fn name(&self) -> &'static str;
@@ -86,6 +99,37 @@ pub trait Integrator: Send + Sync {
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
         Ok(self.render(scene, settings, control))
+    }
+}
+
+/// A Markov-chain integrator: it reports per-depth chain statistics and can refuse to render
+/// (no light path reaches the camera). Every one is an [`Integrator`].
+pub trait ChainIntegrator: Send + Sync {
+    fn name(&self) -> &'static str;
+    fn render_with_report(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> Result<(RenderOutput, MmltReport), String>;
+}
+
+impl<T: ChainIntegrator> Integrator for T {
+    fn name(&self) -> &'static str {
+        ChainIntegrator::name(self)
+    }
+
+    fn try_render(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> Result<RenderOutput, String> {
+        self.render_with_report(scene, settings, control).map(|(out, _)| out)
+    }
+
+    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
+        self.try_render(scene, settings, control).unwrap_or_else(|_| RenderOutput::black(scene))
     }
 }
 
@@ -121,39 +165,42 @@ pub struct IntegratorOptions {
 /// The integrator called `name`.
 pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integrator>> {
     let d = options.max_depth;
+    // Chain options: a count of 0 or an absent probability keeps the integrator's default.
+    let count = |v: usize, default: usize| if v > 0 { v } else { default };
+    let (bootstrap, chains, large_step) = (options.bootstrap, options.chains, options.large_step);
     match name {
         "path" => Some(Box::new(PathIntegrator::new(d))),
         "mmlt" => {
-            let defaults = MmltIntegrator::new(d);
+            let m = MmltIntegrator::new(d);
             Some(Box::new(MmltIntegrator {
-                bootstrap: if options.bootstrap > 0 { options.bootstrap } else { defaults.bootstrap },
-                chains: if options.chains > 0 { options.chains } else { defaults.chains },
-                large_step_probability: options.large_step.unwrap_or(defaults.large_step_probability),
-                ..defaults
+                bootstrap: count(bootstrap, m.bootstrap),
+                chains: count(chains, m.chains),
+                large_step_probability: large_step.unwrap_or(m.large_step_probability),
+                ..m
             }))
         }
         "tempered" => {
-            let defaults = TemperedIntegrator::new(d);
+            let m = TemperedIntegrator::new(d);
             Some(Box::new(TemperedIntegrator {
-                bootstrap: if options.bootstrap > 0 { options.bootstrap } else { defaults.bootstrap },
-                chains: if options.chains > 0 { options.chains } else { defaults.chains },
-                large_step_probability: options.large_step.unwrap_or(defaults.large_step_probability),
-                replicas: if options.replicas > 0 { options.replicas } else { defaults.replicas },
+                bootstrap: count(bootstrap, m.bootstrap),
+                chains: count(chains, m.chains),
+                large_step_probability: large_step.unwrap_or(m.large_step_probability),
+                replicas: count(options.replicas, m.replicas),
                 swap: options.swap,
                 ladder: options.ladder.clone(),
                 roughen_mis: !options.keep_mis,
-                burn_in: options.burn_in.unwrap_or(defaults.burn_in),
-                swap_target: options.swap_target.unwrap_or(defaults.swap_target),
-                ..defaults
+                burn_in: options.burn_in.unwrap_or(m.burn_in),
+                swap_target: options.swap_target.unwrap_or(m.swap_target),
+                ..m
             }))
         }
         "pssmlt" => {
-            let defaults = PssmltIntegrator::new(d);
+            let m = PssmltIntegrator::new(d);
             Some(Box::new(PssmltIntegrator {
-                bootstrap: if options.bootstrap > 0 { options.bootstrap } else { defaults.bootstrap },
-                chains: if options.chains > 0 { options.chains } else { defaults.chains },
-                large_step_probability: options.large_step.unwrap_or(defaults.large_step_probability),
-                ..defaults
+                bootstrap: count(bootstrap, m.bootstrap),
+                chains: count(chains, m.chains),
+                large_step_probability: large_step.unwrap_or(m.large_step_probability),
+                ..m
             }))
         }
         "bdpt" => Some(Box::new(BdptIntegrator {

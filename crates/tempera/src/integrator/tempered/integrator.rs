@@ -6,11 +6,10 @@ use super::ensemble::{Ensemble, Tuning};
 use super::{EquiEnergy, Neighbor, Permutation, SwapStrategy};
 use crate::bidir::{Heuristic, Tempering};
 use crate::integrator::mmlt::{ChainSettings, MmltReport, StartContext, sampler_for};
-use crate::integrator::{Integrator, RenderControl, RenderOutput, RenderSettings, RenderStats};
+use crate::integrator::{ChainIntegrator, RenderControl, RenderOutput, RenderSettings};
 use crate::math::rng::{Pcg32, hash};
 use crate::mcmc::{Chain, SwapStats, TemperedTarget};
 use crate::scene::Scene;
-use crate::texture::Image;
 
 /// Which swap strategy the ensembles use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -86,24 +85,21 @@ impl TemperedIntegrator {
         let rest = if self.ladder.is_empty() { Self::default_ladder(self.replicas) } else { self.ladder.clone() };
         std::iter::once(0.0).chain(rest).take(self.replicas.max(1)).collect()
     }
+}
 
-    fn chain_settings(&self) -> ChainSettings {
-        ChainSettings {
-            bootstrap: self.bootstrap,
-            chains: self.chains,
-            sigma: self.sigma,
-            large_step_probability: self.large_step_probability,
-        }
+impl ChainIntegrator for TemperedIntegrator {
+    fn name(&self) -> &'static str {
+        "tempered"
     }
 
-    /// Renders and returns the per-depth statistics (with ladders and swap statistics).
-    pub fn render_with_report(
+    /// Renders; the statistics carry ladders and swap statistics.
+    fn render_with_report(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<(RenderOutput, MmltReport), String> {
-        let chains = self.chain_settings();
+        let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
         let ladder = self.ladder();
         let temper = |a| Tempering { a, heuristic: Heuristic::Power, roughen_mis: self.roughen_mis };
         let main = |depth| TemperedTarget { scene, depth, temper: temper(0.0) };
@@ -139,30 +135,6 @@ impl TemperedIntegrator {
                     n: 0,
                 }),
             }
-        })
-    }
-}
-
-impl Integrator for TemperedIntegrator {
-    fn name(&self) -> &'static str {
-        "tempered"
-    }
-
-    fn try_render(
-        &self,
-        scene: &Scene,
-        settings: &RenderSettings,
-        control: &RenderControl,
-    ) -> Result<RenderOutput, String> {
-        self.render_with_report(scene, settings, control).map(|(out, _)| out)
-    }
-
-    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
-        self.try_render(scene, settings, control).unwrap_or_else(|_| RenderOutput {
-            image: Image::filled(scene.film.width as usize, scene.film.height as usize, crate::math::Rgb::ZERO),
-            stats: RenderStats::default(),
-            layers: Vec::new(),
-            chains: Vec::new(),
         })
     }
 }
