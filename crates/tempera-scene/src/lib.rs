@@ -2,6 +2,7 @@
 //! [`tempera::scene::SceneBuilder`]; the core itself knows no file format. The format is chosen
 //! by extension: `.pbrt` (pbrt-v4) and `.xml` (Mitsuba 0.5/0.6 XML).
 
+mod common;
 pub mod diagnostics;
 mod mitsuba;
 mod pbrt;

@@ -2,6 +2,8 @@
 //! kind, BSDFs, emitters, camera conventions, diagnostics with file and line, strict mode, and
 //! robustness against truncated and mutated input.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use tempera::geometry::Shape;
 use tempera::math::{Vec2, Vec3};
@@ -152,24 +154,13 @@ fn one_sided_bsdfs_and_twosided_wrappers() {
 fn truncated_and_mutated_input_never_panics() {
     let path = fixture("full.xml");
     let text = std::fs::read_to_string(&path).unwrap();
-    let chars: Vec<char> = text.chars().collect();
-    for cut in (0..chars.len()).step_by(5) {
-        let prefix: String = chars[..cut].iter().collect();
-        let _ = load_mitsuba_str(&prefix, &path, &LoadOptions::default());
-    }
-    let mut rng = tempera::math::rng::Pcg32::new(7, 3);
-    let alphabet = ['<', '>', '"', '/', '=', '-', '0', '9', '.', ' ', 'x', '$', '#'];
-    for _ in 0..1500 {
-        let mut mutated = chars.clone();
-        for _ in 0..1 + rng.next_u32() % 4 {
-            let i = rng.next_u32() as usize % mutated.len();
-            mutated[i] = alphabet[rng.next_u32() as usize % alphabet.len()];
-        }
-        let s: String = mutated.into_iter().collect();
-        if let Ok(loaded) = load_mitsuba_str(&s, &path, &LoadOptions::default()) {
-            let _ = loaded.builder.build();
-        }
-    }
+    common::load_truncated_and_mutated(
+        &text,
+        5,
+        (7, 3),
+        &['<', '>', '"', '/', '=', '-', '0', '9', '.', ' ', 'x', '$', '#'],
+        |s| load_mitsuba_str(s, &path, &LoadOptions::default()),
+    );
 }
 
 #[test]

@@ -2,6 +2,8 @@
 //! directive family, diagnostics with file/line/column, strict mode, and robustness against
 //! truncated and mutated input.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use tempera::geometry::Shape;
@@ -165,26 +167,15 @@ fn emission_follows_pbrt_units() {
 
 #[test]
 fn truncated_and_mutated_input_never_panics() {
-    let text = std::fs::read_to_string(fixture("full.pbrt")).unwrap();
     let path = fixture("full.pbrt");
-    let chars: Vec<char> = text.chars().collect();
-    for cut in (0..chars.len()).step_by(3) {
-        let prefix: String = chars[..cut].iter().collect();
-        let _ = load_pbrt_str(&prefix, &path, &LoadOptions::default());
-    }
-    let mut rng = tempera::math::rng::Pcg32::new(99, 1);
-    let alphabet = ['[', ']', '"', '#', '-', '0', '9', '.', 'e', ' ', '\n', 'x', '\\'];
-    for _ in 0..1500 {
-        let mut mutated = chars.clone();
-        for _ in 0..1 + rng.next_u32() % 4 {
-            let i = rng.next_u32() as usize % mutated.len();
-            mutated[i] = alphabet[rng.next_u32() as usize % alphabet.len()];
-        }
-        let s: String = mutated.into_iter().collect();
-        if let Ok(loaded) = load_pbrt_str(&s, &path, &LoadOptions::default()) {
-            let _ = loaded.builder.build();
-        }
-    }
+    let text = std::fs::read_to_string(&path).unwrap();
+    common::load_truncated_and_mutated(
+        &text,
+        3,
+        (99, 1),
+        &['[', ']', '"', '#', '-', '0', '9', '.', 'e', ' ', '\n', 'x', '\\'],
+        |s| load_pbrt_str(s, &path, &LoadOptions::default()),
+    );
 }
 
 #[test]

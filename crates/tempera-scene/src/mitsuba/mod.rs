@@ -9,12 +9,12 @@ mod props;
 mod shapes;
 mod sky;
 
-use crate::diagnostics::{Loc, Warning};
+use crate::diagnostics::{Diagnostics, Loc};
 use crate::{LoadError, LoadInfo, LoadOptions, LoadedScene};
 use bsdfs::BsdfDesc;
 use props::Props;
 use roxmltree::Node;
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use tempera::camera::{CameraDesc, FovAxis};
@@ -71,9 +71,7 @@ impl Ctx {
 
 struct Loader {
     builder: SceneBuilder,
-    warnings: Vec<Warning>,
-    warned_once: HashSet<String>,
-    strict: bool,
+    diag: Diagnostics,
     info: LoadInfo,
     bsdfs: HashMap<String, BsdfDesc>,
     textures: HashMap<String, Texture>,
@@ -86,19 +84,11 @@ struct Loader {
 
 impl Loader {
     fn warn(&mut self, loc: Option<&Loc>, message: impl Into<String>) -> Result<(), LoadError> {
-        let message = message.into();
-        if self.strict {
-            return Err(match loc {
-                Some(loc) => LoadError::Syntax { loc: loc.clone(), message },
-                None => LoadError::Unsupported { message },
-            });
-        }
-        self.warnings.push(Warning { loc: loc.cloned(), message });
-        Ok(())
+        self.diag.warn(loc, message)
     }
 
     fn warn_once(&mut self, key: &str, loc: Option<&Loc>, message: impl Into<String>) -> Result<(), LoadError> {
-        if self.warned_once.insert(key.to_owned()) { self.warn(loc, message) } else { Ok(()) }
+        self.diag.warn_once(key, loc, message)
     }
 
     /// Warns about the properties of `props` that nothing read.
@@ -395,9 +385,7 @@ pub fn load_str(text: &str, path: &Path, options: &LoadOptions) -> Result<Loaded
 fn new_loader(options: &LoadOptions) -> Loader {
     Loader {
         builder: SceneBuilder::new(),
-        warnings: Vec::new(),
-        warned_once: HashSet::new(),
-        strict: options.strict,
+        diag: Diagnostics::new(options.strict),
         info: LoadInfo::default(),
         bsdfs: HashMap::new(),
         textures: HashMap::new(),
@@ -413,5 +401,5 @@ fn finish(loader: Loader) -> LoadedScene {
     let mut builder = loader.builder;
     builder.set_film(loader.film);
     builder.set_defaults(loader.defaults);
-    LoadedScene { builder, warnings: loader.warnings, info: loader.info }
+    LoadedScene { builder, warnings: loader.diag.warnings, info: loader.info }
 }

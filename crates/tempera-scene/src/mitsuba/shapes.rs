@@ -6,6 +6,7 @@
 use super::props::Props;
 use super::{Ctx, Loader};
 use crate::LoadError;
+use crate::common::{grid, uniform_scale};
 use roxmltree::Node;
 use std::io::BufReader;
 use tempera::geometry::{Disk, Shape, Sphere, TriangleMesh};
@@ -15,18 +16,6 @@ use tempera::scene::{AreaEmission, PrototypeShape};
 use tempera::texture::Texture;
 
 const SEGMENTS: u32 = 96;
-
-fn uniform_scale(m: &Mat4) -> Option<f32> {
-    let c = [m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate()];
-    let s = c[0].length();
-    let ok = s > 0.0
-        && c.iter().all(|v| (v.length() - s).abs() <= 1e-4 * s)
-        && c[0].dot(c[1]).abs() <= 1e-4 * s * s
-        && c[0].dot(c[2]).abs() <= 1e-4 * s * s
-        && c[1].dot(c[2]).abs() <= 1e-4 * s * s
-        && m.row(3) == tempera::math::Vec4::W;
-    ok.then_some(s)
-}
 
 fn mesh(
     positions: Vec<Vec3>,
@@ -63,28 +52,6 @@ fn cube() -> TriangleMesh {
         idx.push([base, base + 2, base + 3]);
     }
     mesh(p, idx, None, Some(uv))
-}
-
-fn grid(nu: u32, nv: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> TriangleMesh {
-    let (mut p, mut n, mut uv, mut idx) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for j in 0..=nv {
-        for i in 0..=nu {
-            let (u, v) = (i as f32 / nu as f32, j as f32 / nv as f32);
-            let (pos, nor) = f(u, v);
-            p.push(pos);
-            n.push(nor);
-            uv.push(Vec2::new(u, v));
-        }
-    }
-    for j in 0..nv {
-        for i in 0..nu {
-            let a = j * (nu + 1) + i;
-            let b = a + nu + 1;
-            idx.push([a, a + 1, b + 1]);
-            idx.push([a, b + 1, b]);
-        }
-    }
-    mesh(p, idx, Some(n), Some(uv))
 }
 
 fn flip_v(uvs: Option<Vec<Vec2>>) -> Option<Vec<Vec2>> {

@@ -13,12 +13,12 @@ mod shapes;
 mod state;
 mod textures;
 
-use crate::diagnostics::{Loc, Warning};
+use crate::diagnostics::{Diagnostics, Loc};
 use crate::{LoadError, LoadInfo, LoadOptions, LoadedScene};
 use lexer::{Lexer, TokenKind};
 use params::ParamSet;
 use state::{GraphicsState, MaterialSlot, Named, ObjectShape};
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use tempera::film::{FilmDesc, Filter};
@@ -39,9 +39,7 @@ struct Loader {
     state: GraphicsState,
     stack: Vec<(GraphicsState, Block, Loc)>,
     named: Named,
-    warnings: Vec<Warning>,
-    warned_once: HashSet<String>,
-    strict: bool,
+    diag: Diagnostics,
     info: LoadInfo,
     default_material: Option<MaterialId>,
     object: Option<(String, Vec<ObjectShape>, Loc)>,
@@ -59,9 +57,7 @@ impl Loader {
             state: GraphicsState::default(),
             stack: Vec::new(),
             named: Named::default(),
-            warnings: Vec::new(),
-            warned_once: HashSet::new(),
-            strict: options.strict,
+            diag: Diagnostics::new(options.strict),
             info: LoadInfo::default(),
             default_material: None,
             object: None,
@@ -75,20 +71,12 @@ impl Loader {
 
     /// Records a warning, or fails in strict mode.
     fn warn(&mut self, loc: Option<&Loc>, message: impl Into<String>) -> Result<(), LoadError> {
-        let message = message.into();
-        if self.strict {
-            return Err(match loc {
-                Some(loc) => LoadError::Syntax { loc: loc.clone(), message },
-                None => LoadError::Unsupported { message },
-            });
-        }
-        self.warnings.push(Warning { loc: loc.cloned(), message });
-        Ok(())
+        self.diag.warn(loc, message)
     }
 
     /// Warns once per `key` (e.g. once per approximated material type).
     fn warn_once(&mut self, key: &str, loc: Option<&Loc>, message: impl Into<String>) -> Result<(), LoadError> {
-        if self.warned_once.insert(key.to_owned()) { self.warn(loc, message) } else { Ok(()) }
+        self.diag.warn_once(key, loc, message)
     }
 
     /// Warns about every parameter of `params` that no lookup used.
@@ -194,5 +182,5 @@ fn finish(loader: Loader) -> Result<LoadedScene, LoadError> {
     let mut builder = loader.builder;
     builder.set_film(loader.film);
     builder.set_defaults(loader.defaults);
-    Ok(LoadedScene { builder, warnings: loader.warnings, info: loader.info })
+    Ok(LoadedScene { builder, warnings: loader.diag.warnings, info: loader.info })
 }

@@ -6,8 +6,8 @@ use super::Loader;
 use super::directives::string_arg;
 use super::lexer::Lexer;
 use super::params::ParamSet;
-use super::state::uniform_scale;
 use crate::LoadError;
+use crate::common::{grid, uniform_scale};
 use crate::diagnostics::Loc;
 use std::f32::consts::TAU;
 use tempera::geometry::{Disk, Shape, Sphere, TriangleMesh};
@@ -23,32 +23,6 @@ fn syntax(loc: &Loc, message: impl Into<String>) -> LoadError {
 
 fn vec3s(v: Vec<Vec<f64>>) -> Vec<Vec3> {
     v.into_iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect()
-}
-
-/// A grid mesh over `(u, v) ∈ [0,1]²` mapped through `f` to a position and normal.
-fn grid(nu: u32, nv: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> TriangleMesh {
-    let mut positions = Vec::new();
-    let mut normals = Vec::new();
-    let mut uvs = Vec::new();
-    for j in 0..=nv {
-        for i in 0..=nu {
-            let (u, v) = (i as f32 / nu as f32, j as f32 / nv as f32);
-            let (p, n) = f(u, v);
-            positions.push(p);
-            normals.push(n);
-            uvs.push(Vec2::new(u, v));
-        }
-    }
-    let mut indices = Vec::new();
-    for j in 0..nv {
-        for i in 0..nu {
-            let a = j * (nu + 1) + i;
-            let b = a + nu + 1;
-            indices.push([a, a + 1, b + 1]);
-            indices.push([a, b + 1, b]);
-        }
-    }
-    TriangleMesh::new(positions, indices, Some(normals), Some(uvs)).expect("grid indices are in range")
 }
 
 fn sphere_mesh(radius: f32, zmin: f32, zmax: f32, phi_max: f32) -> TriangleMesh {

@@ -65,17 +65,3 @@ pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Option<Mat4> {
     let camera_to_world = Mat4::from_cols(right.extend(0.0), new_up.extend(0.0), dir.extend(0.0), eye.extend(1.0));
     Some(camera_to_world.inverse())
 }
-
-/// For a similarity transform (rotation, uniform scale, translation, possibly mirrored), its
-/// scale factor; `None` for shears and non-uniform scales.
-pub fn uniform_scale(m: &Mat4) -> Option<f32> {
-    let c = [m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate()];
-    let s = c[0].length();
-    let ok = s > 0.0
-        && c.iter().all(|v| (v.length() - s).abs() <= 1e-4 * s)
-        && c[0].dot(c[1]).abs() <= 1e-4 * s * s
-        && c[0].dot(c[2]).abs() <= 1e-4 * s * s
-        && c[1].dot(c[2]).abs() <= 1e-4 * s * s
-        && m.row(3) == tempera::math::Vec4::W;
-    ok.then_some(s)
-}

@@ -6,6 +6,19 @@ use crate::math::frame::Frame;
 use crate::math::{Rgb, Vec3, luminance};
 use std::f32::consts::PI;
 
+/// Illumination at `reference` from a point emitter at `position` whose intensity towards
+/// world direction `w` (leaving the light) is `intensity(w)`: a delta sample, `I/d²`.
+fn sample_point(position: Vec3, reference: Vec3, intensity: impl Fn(Vec3) -> Rgb) -> Option<LightSample> {
+    let delta = position - reference;
+    let d2 = delta.length_squared();
+    if d2 == 0.0 {
+        return None;
+    }
+    let dist = d2.sqrt();
+    let wi = delta / dist;
+    Some(LightSample { li: intensity(-wi) / d2, wi, p: position, n: Vec3::ZERO, dist, pdf: 1.0, delta: true })
+}
+
 #[derive(Clone, Debug)]
 pub struct PointLight {
     pub position: Vec3,
@@ -15,21 +28,7 @@ pub struct PointLight {
 
 impl PointLight {
     pub fn sample_li(&self, reference: Vec3) -> Option<LightSample> {
-        let delta = self.position - reference;
-        let d2 = delta.length_squared();
-        if d2 == 0.0 {
-            return None;
-        }
-        let dist = d2.sqrt();
-        Some(LightSample {
-            li: self.intensity / d2,
-            wi: delta / dist,
-            p: self.position,
-            n: Vec3::ZERO,
-            dist,
-            pdf: 1.0,
-            delta: true,
-        })
+        sample_point(self.position, reference, |_| self.intensity)
     }
 
     pub fn power(&self) -> f32 {
@@ -75,14 +74,7 @@ impl SpotLight {
     }
 
     pub fn sample_li(&self, reference: Vec3) -> Option<LightSample> {
-        let delta = self.position - reference;
-        let d2 = delta.length_squared();
-        if d2 == 0.0 {
-            return None;
-        }
-        let dist = d2.sqrt();
-        let wi = delta / dist;
-        Some(LightSample { li: self.i(-wi) / d2, wi, p: self.position, n: Vec3::ZERO, dist, pdf: 1.0, delta: true })
+        sample_point(self.position, reference, |w| self.i(w))
     }
 
     pub fn power(&self) -> f32 {

@@ -25,6 +25,8 @@ pub struct Ensemble<'a> {
     pub swaps: SwapStats,
     /// Ladder tuning still to do, if any.
     pub tuning: Option<Tuning>,
+    /// Storage for the cross-evaluations of one swap step, reused across sweeps.
+    pub(super) cross_cache: Vec<Option<f64>>,
 }
 
 /// The state of the ladder's burn-in.
@@ -78,7 +80,16 @@ pub fn apply_permutation<T>(items: &mut [T], sigma: &[usize], exchange: impl Fn(
     }
 }
 
-impl Ensemble<'_> {
+impl<'a> Ensemble<'a> {
+    /// Cross-evaluations of the current states, computed on demand, in the reused storage.
+    fn cross(&mut self) -> Cross<'_, 'a> {
+        let k = self.replicas.len();
+        let mut cache = std::mem::take(&mut self.cross_cache);
+        cache.clear();
+        cache.resize(k * k, None);
+        Cross { ensemble: self, cache }
+    }
+
     /// One swap step; replicas that receive another state re-value it under their target.
     fn swap(&mut self) {
         let k = self.replicas.len();
@@ -90,8 +101,10 @@ impl Ensemble<'_> {
         // The strategy is moved out while the cross-evaluations borrow the ensemble.
         let strategy = std::mem::replace(&mut self.strategy, Box::new(super::Neighbor));
         let sigma = {
-            let mut cross = Cross { ensemble: self, cache: vec![None; k * k] };
-            strategy.step(&mut cross, &mut rng, &mut swaps)
+            let mut cross = self.cross();
+            let sigma = strategy.step(&mut cross, &mut rng, &mut swaps);
+            cross.ensemble.cross_cache = cross.cache;
+            sigma
         };
         self.strategy = strategy;
         self.rng = rng;
@@ -128,8 +141,10 @@ impl Ensemble<'_> {
             }
             let gamma = (1.0 + tuning.n as f64 / 10.0).powf(-0.6);
             let alphas: Vec<f64> = {
-                let mut cross = Cross { ensemble: self, cache: vec![None; k * k] };
-                (1..k).map(|j| swap_acceptance(&mut cross, j - 1, j)).collect()
+                let mut cross = self.cross();
+                let alphas = (1..k).map(|j| swap_acceptance(&mut cross, j - 1, j)).collect();
+                cross.ensemble.cross_cache = cross.cache;
+                alphas
             };
             // Roughening saturates at α = 1 (a = 1 flattens every lobe completely), so gaps
             // stay below 1/(K−1) and the ladder within (0, 1].

@@ -110,7 +110,7 @@ impl ChainIntegrator for TemperedIntegrator {
             let strategy: Box<dyn SwapStrategy> = match self.swap {
                 Swap::Neighbor => Box::new(Neighbor),
                 Swap::EquiEnergy => Box::new(EquiEnergy::from_samples(bootstrap, RINGS)),
-                Swap::Permutation => Box::new(Permutation),
+                Swap::Permutation => Box::new(Permutation::new(ladder.len())),
             };
             // Replica 0 starts exactly as an MMLT chain; the others draw their own start states.
             let mut replicas = Vec::with_capacity(ladder.len());
@@ -129,6 +129,7 @@ impl ChainIntegrator for TemperedIntegrator {
                 strategy,
                 rng: Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11),
                 swaps: SwapStats::new(ladder.len()),
+                cross_cache: Vec::new(),
                 tuning: (self.ladder.is_empty() && self.burn_in > 0 && ladder.len() > 1).then_some(Tuning {
                     sweeps: self.burn_in,
                     target: self.swap_target,

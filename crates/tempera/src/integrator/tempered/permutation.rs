@@ -6,11 +6,19 @@
 use super::{CrossValues, SwapStats, SwapStrategy};
 use crate::math::rng::Pcg32;
 
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Permutation;
+/// The strategy for ensembles of `K` replicas, with their `K!` permutations enumerated once.
+#[derive(Clone, Debug)]
+pub struct Permutation {
+    perms: Vec<Vec<usize>>,
+}
 
 impl Permutation {
     pub const MAX_REPLICAS: usize = 8;
+
+    /// For ensembles of `replicas` replicas (at most [`Self::MAX_REPLICAS`]).
+    pub fn new(replicas: usize) -> Self {
+        Self { perms: permutations(replicas.min(Self::MAX_REPLICAS)) }
+    }
 }
 
 /// Every permutation of `0..k` in lexicographic order.
@@ -54,13 +62,21 @@ impl SwapStrategy for Permutation {
             return None;
         }
         stats.steps += 1;
-        let perms = permutations(k);
-        let logs = log_weights(values, &perms);
-        let max = logs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let rebuilt;
+        let perms = if self.perms.first().is_some_and(|p| p.len() == k) {
+            &self.perms
+        } else {
+            rebuilt = permutations(k);
+            &rebuilt
+        };
+        let mut weights = log_weights(values, perms);
+        let max = weights.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         if max == f64::NEG_INFINITY {
             return None;
         }
-        let weights: Vec<f64> = logs.iter().map(|&l| (l - max).exp()).collect();
+        for w in &mut weights {
+            *w = (*w - max).exp();
+        }
         let total: f64 = weights.iter().sum();
         let mut u = rng.next_f64() * total;
         // Rounding may run past the end: fall back on the heaviest permutation.

@@ -110,7 +110,7 @@ fn equi_energy_moves_leave_the_main_target_invariant() {
 
 #[test]
 fn permutations_leave_the_main_target_invariant() {
-    let (z, stats) = run(&Permutation, 50_000, 3);
+    let (z, stats) = run(&Permutation::new(4), 50_000, 3);
     assert!(z < 4.5, "worst bin z = {z}");
     assert!(stats.main_changed > 1000 && stats.non_identity > stats.main_changed);
 }
@@ -158,8 +158,9 @@ fn permutation_frequencies_follow_the_weights() {
     let draws = 200_000;
     let mut counts = vec![0u64; perms.len()];
     let mut stats = SwapStats::new(k);
+    let strategy = Permutation::new(k);
     for _ in 0..draws {
-        let sigma = Permutation.step(&mut m, &mut rng, &mut stats).unwrap_or_else(|| (0..k).collect());
+        let sigma = strategy.step(&mut m, &mut rng, &mut stats).unwrap_or_else(|| (0..k).collect());
         counts[perms.iter().position(|p| *p == sigma).unwrap()] += 1;
     }
     for (p, &c) in perms.iter().zip(&counts) {

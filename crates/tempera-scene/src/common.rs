@@ -1,0 +1,45 @@
+//! Helpers shared by the loaders: the scale of a similarity transform, and parametric grid
+//! meshes for shapes built from triangles.
+
+use tempera::geometry::TriangleMesh;
+use tempera::math::{Mat4, Vec2, Vec3};
+
+/// For a similarity transform (rotation, uniform scale, translation, possibly mirrored), its
+/// scale factor; `None` for shears and non-uniform scales.
+pub fn uniform_scale(m: &Mat4) -> Option<f32> {
+    let c = [m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate()];
+    let s = c[0].length();
+    let ok = s > 0.0
+        && c.iter().all(|v| (v.length() - s).abs() <= 1e-4 * s)
+        && c[0].dot(c[1]).abs() <= 1e-4 * s * s
+        && c[0].dot(c[2]).abs() <= 1e-4 * s * s
+        && c[1].dot(c[2]).abs() <= 1e-4 * s * s
+        && m.row(3) == tempera::math::Vec4::W;
+    ok.then_some(s)
+}
+
+/// A grid mesh over `(u, v) ∈ [0,1]²` mapped through `f` to a position and normal.
+pub fn grid(nu: u32, nv: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> TriangleMesh {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut uvs = Vec::new();
+    for j in 0..=nv {
+        for i in 0..=nu {
+            let (u, v) = (i as f32 / nu as f32, j as f32 / nv as f32);
+            let (p, n) = f(u, v);
+            positions.push(p);
+            normals.push(n);
+            uvs.push(Vec2::new(u, v));
+        }
+    }
+    let mut indices = Vec::new();
+    for j in 0..nv {
+        for i in 0..nu {
+            let a = j * (nu + 1) + i;
+            let b = a + nu + 1;
+            indices.push([a, a + 1, b + 1]);
+            indices.push([a, b + 1, b]);
+        }
+    }
+    TriangleMesh::new(positions, indices, Some(normals), Some(uvs)).expect("grid indices are in range")
+}
