@@ -75,7 +75,7 @@ impl<S: State> Chain<S> {
     }
 
     /// Makes up to `mutations` mutations, checking `stop` every 256, splatting into `splats`
-    /// when given; returns how many were made.
+    /// when given; returns how many were made. The time spent is added to the statistics.
     pub fn run(
         &mut self,
         target: &impl Target<State = S>,
@@ -84,53 +84,57 @@ impl<S: State> Chain<S> {
         stop: &dyn Fn() -> bool,
     ) -> u64 {
         let start = std::time::Instant::now();
-        let splat = |splats: &mut Option<&mut SplatBuffer>, c: &S, weight: f32| {
-            if let Some(splats) = splats
-                && weight > 0.0
-                && c.value() > 0.0
-            {
-                c.splat(splats, weight / c.value());
-            }
-        };
         let mut done = 0;
         while done < mutations {
             if done % 256 == 0 && stop() {
                 break;
             }
-            self.sampler.start_iteration();
-            let large = self.sampler.is_large_step();
-            let invalid = target.evaluate(&mut self.sampler, &mut self.paths, &mut self.rays, &mut self.proposal);
-            let (proposal, current) = (&self.proposal, &self.current);
-            let s = &mut self.stats;
-            s.invalid += u64::from(invalid);
-            if large {
-                let f = f64::from(proposal.value());
-                self.large = (self.large.0 + f, self.large.1 + f * f, self.large.2 + 1);
-                s.large_steps_proposed += 1;
-            } else {
-                s.small_steps_proposed += 1;
-            }
-            let a = if current.value() > 0.0 { (proposal.value() / current.value()).min(1.0) } else { 1.0 };
-            splat(&mut splats, proposal, a);
-            splat(&mut splats, current, 1.0 - a);
-            s.mutations += 1;
+            self.mutate(target, splats.as_deref_mut());
             done += 1;
-            if self.rng.next_f32() < a {
-                if proposal.technique() != current.technique() {
-                    s.technique_changes += 1;
-                }
-                if large {
-                    s.large_steps_accepted += 1;
-                } else {
-                    s.small_steps_accepted += 1;
-                }
-                std::mem::swap(&mut self.current, &mut self.proposal);
-                self.sampler.accept();
-            } else {
-                self.sampler.reject();
-            }
         }
         self.stats.seconds += start.elapsed().as_secs_f64();
         done
+    }
+
+    /// One mutation: propose, splat proposal and current state with their expected weights
+    /// (when `splats` is given), accept or reject. Not timed: callers that interleave chains
+    /// (replica ensembles) time whole sweeps.
+    pub fn mutate(&mut self, target: &impl Target<State = S>, splats: Option<&mut SplatBuffer>) {
+        self.sampler.start_iteration();
+        let large = self.sampler.is_large_step();
+        let invalid = target.evaluate(&mut self.sampler, &mut self.paths, &mut self.rays, &mut self.proposal);
+        let (proposal, current) = (&self.proposal, &self.current);
+        let s = &mut self.stats;
+        s.invalid += u64::from(invalid);
+        if large {
+            let f = f64::from(proposal.value());
+            self.large = (self.large.0 + f, self.large.1 + f * f, self.large.2 + 1);
+            s.large_steps_proposed += 1;
+        } else {
+            s.small_steps_proposed += 1;
+        }
+        let a = if current.value() > 0.0 { (proposal.value() / current.value()).min(1.0) } else { 1.0 };
+        if let Some(splats) = splats {
+            for (c, weight) in [(proposal, a), (current, 1.0 - a)] {
+                if weight > 0.0 && c.value() > 0.0 {
+                    c.splat(splats, weight / c.value());
+                }
+            }
+        }
+        s.mutations += 1;
+        if self.rng.next_f32() < a {
+            if proposal.technique() != current.technique() {
+                s.technique_changes += 1;
+            }
+            if large {
+                s.large_steps_accepted += 1;
+            } else {
+                s.small_steps_accepted += 1;
+            }
+            std::mem::swap(&mut self.current, &mut self.proposal);
+            self.sampler.accept();
+        } else {
+            self.sampler.reject();
+        }
     }
 }

@@ -128,7 +128,6 @@ impl Ensemble<'_> {
     fn tune(&mut self, stop: &dyn Fn() -> bool) -> bool {
         let Some(mut tuning) = self.tuning.take() else { return true };
         let k = self.replicas.len();
-        let never = || false;
         let mut log_gaps: Vec<f64> =
             (1..k).map(|j| f64::from(self.targets[j].temper.a - self.targets[j - 1].temper.a).max(1e-6).ln()).collect();
         while tuning.sweeps > 0 {
@@ -137,7 +136,7 @@ impl Ensemble<'_> {
                 return false;
             }
             for (chain, target) in self.replicas.iter_mut().zip(&self.targets) {
-                chain.run(target, 1, None, &never);
+                chain.mutate(target, None);
             }
             let gamma = (1.0 + tuning.n as f64 / 10.0).powf(-0.6);
             let alphas: Vec<f64> = {
@@ -187,18 +186,20 @@ impl Walker for Ensemble<'_> {
         if self.replicas.len() == 1 {
             return self.replicas[0].run(&self.targets[0], mutations, Some(splats), stop);
         }
-        let never = || false;
+        let start = std::time::Instant::now();
         let mut done = 0;
         while done < mutations {
             if done % 256 == 0 && stop() {
                 break;
             }
             for (j, (chain, target)) in self.replicas.iter_mut().zip(&self.targets).enumerate() {
-                chain.run(target, 1, if j == 0 { Some(&mut *splats) } else { None }, &never);
+                chain.mutate(target, if j == 0 { Some(&mut *splats) } else { None });
             }
             self.swap();
             done += 1;
         }
+        // The ensemble's time is its main chain's.
+        self.replicas[0].stats.seconds += start.elapsed().as_secs_f64();
         done
     }
 
