@@ -36,7 +36,7 @@ fn main() -> anyhow::Result<()> {
     scene.set_resolution(size, ((size as f32 * aspect).round() as u32).max(1));
     let depth = scene.defaults.max_depth.min(12);
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let render = |integrator: &dyn Integrator, budget: Budget, seed: u64| {
         integrator.render(&scene, &RenderSettings { budget, seed, threads: 0 }, &control)
     };

@@ -264,7 +264,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
     };
     install_interrupt_handler();
-    let control = RenderControl { cancel: &CANCEL, on_progress: &on_progress };
+    let control = RenderControl::new(&CANCEL, &on_progress);
     let out = integrator.try_render(&scene, &settings, &control).map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
 

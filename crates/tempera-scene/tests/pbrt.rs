@@ -68,7 +68,7 @@ fn full_fixture_loads_every_directive_family() {
     assert_eq!(scene.lights.len(), 5);
 
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let mut scene = scene;
     scene.set_resolution(16, 12);
     let out = PathIntegrator::new(5).render(

@@ -21,7 +21,7 @@ fn shared_scenes() -> Option<PathBuf> {
 
 fn render(scene: &Scene, max_depth: u32, spp: u32) -> Image {
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let settings = RenderSettings { budget: Budget::Samples(spp), seed: 7, threads: 0 };
     PathIntegrator::new(max_depth).render(scene, &settings, &control).image
 }

@@ -23,7 +23,7 @@ static SCENE: LazyLock<Scene> = LazyLock::new(|| {
 
 fn render(integrator: &dyn Integrator, threads: usize) {
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let settings = RenderSettings { budget: Budget::Samples(MPP), seed: 1, threads };
     let out = integrator.render(&SCENE, &settings, &control);
     divan::black_box(out.image);

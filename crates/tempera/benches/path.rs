@@ -18,7 +18,7 @@ static SCENE: LazyLock<Scene> = LazyLock::new(|| {
 
 fn render(threads: usize) {
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let settings = RenderSettings { budget: Budget::Samples(1), seed: 1, threads };
     let out = PathIntegrator::new(8).render(&SCENE, &settings, &control);
     divan::black_box(out.image);

@@ -8,7 +8,7 @@
 //! image brightness does not hinge on the bootstrap. Chains are the unit of parallel work and
 //! splat into per-thread fixed-point buffers: the image is bit-identical at any thread count.
 
-use super::{Budget, ChainIntegrator, RenderControl, RenderOutput, RenderSettings, RenderStats};
+use super::{Budget, ChainIntegrator, RenderControl, RenderOutput, RenderSettings, RenderStats, SnapshotClock};
 use crate::film::SplatBuffer;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::{Pcg32, hash};
@@ -167,6 +167,18 @@ impl ThreadSplats {
         f(&mut guard[depth])
     }
 
+    /// The per-depth sums so far, leaving the buffers as they are.
+    fn snapshot(&self, depths: usize, w: u32, h: u32) -> Vec<SplatBuffer> {
+        let mut out = vec![SplatBuffer::new(w, h); depths];
+        for buffer in &self.0 {
+            let buffer = buffer.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            for (total, b) in out.iter_mut().zip(buffer.iter()) {
+                total.merge(b);
+            }
+        }
+        out
+    }
+
     fn merged(self, depths: usize, w: u32, h: u32) -> Vec<SplatBuffer> {
         let mut out = vec![SplatBuffer::new(w, h); depths];
         for buffer in self.0 {
@@ -304,60 +316,99 @@ impl ChainSettings {
             }),
             // A time budget: rounds of about one mutation per pixel, shared in proportion to b_k,
             // until the deadline.
+            // Snapshots (if asked for) are developed between rounds.
             None => {
+                let mut clock = SnapshotClock::new(start, control, settings.budget);
                 while !stop() {
                     run_round(&mut chains, &|i| {
                         let (k, _, n, _) = plan[i];
                         ((share(k) * pixels as f64 / n as f64).round() as u64).max(1)
                     });
+                    if clock.due() && !control.cancel.load(Ordering::Relaxed) {
+                        let out = develop(&boots, &chains, &plan, &splats.snapshot(depths, w, h), pixels);
+                        let seconds = start.elapsed().as_secs_f64();
+                        let out = RenderOutput {
+                            stats: RenderStats { rays: out.stats.rays + total_rays, seconds, ..out.stats },
+                            ..out
+                        };
+                        clock.deliver(control, &out);
+                    }
                 }
             }
         }
-        // Merge statistics in chain order; refine b_k with the large-step proposals.
-        let mut report =
-            MmltReport { depths: (0..depths).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect() };
-        let mut large: Vec<(f64, f64, u64)> = vec![(0.0, 0.0, 0); depths];
-        for (chain, &(k, ..)) in chains.iter().zip(&plan) {
-            report.depths[k].merge(&chain.stats());
-            let l = chain.large();
-            large[k] = (large[k].0 + l.0, large[k].1 + l.1, large[k].2 + l.2);
-            total_rays += chain.rays();
-        }
-        let per_depth = splats.merged(depths, w, h);
-        let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
-        let mut invalid = 0;
-        for (k, d) in report.depths.iter_mut().enumerate() {
-            let boot = &boots[k];
-            let n = boot.values.len() as u64 + large[k].2;
-            let sum = boot.mean * boot.values.len() as f64 + large[k].0;
-            let sum2 = boot.sum2 + large[k].1;
-            d.b = if n > 0 { sum / n as f64 } else { 0.0 };
-            let var = if n > 1 { (sum2 / n as f64 - d.b * d.b).max(0.0) * n as f64 / (n - 1) as f64 } else { 0.0 };
-            d.b_rel_se = if d.b > 0.0 { (var / n as f64).sqrt() / d.b } else { 0.0 };
-            d.bootstrap_samples = boot.values.len() as u64;
-            d.large_step_samples = large[k].2;
-            d.invalid += boot.invalid;
-            invalid += d.invalid + per_depth[k].invalid;
-            if d.mutations == 0 {
-                continue;
-            }
-            // Each depth's splats estimate its image per mutation: N_pixels · b_k / M_k.
-            let layer = per_depth[k].image(d.b * pixels as f64 / d.mutations as f64);
-            for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
-                *p += *q;
-            }
-        }
-        let mutations: u64 = report.depths.iter().map(|d| d.mutations).sum();
-        let stats = RenderStats {
-            spp_completed: (mutations / pixels.max(1)) as u32,
-            pixel_samples: mutations,
-            rays: total_rays,
-            invalid_samples: invalid,
-            seconds: start.elapsed().as_secs_f64(),
-            cancelled: control.cancel.load(Ordering::Relaxed),
+        let out = develop(&boots, &chains, &plan, &splats.merged(depths, w, h), pixels);
+        let out = RenderOutput {
+            stats: RenderStats {
+                rays: out.stats.rays + total_rays,
+                seconds: start.elapsed().as_secs_f64(),
+                cancelled: control.cancel.load(Ordering::Relaxed),
+                ..out.stats
+            },
+            ..out
         };
-        Ok((RenderOutput { image, stats, layers: Vec::new(), chains: report.depths.clone() }, report))
+        let report = MmltReport { depths: out.chains.clone() };
+        Ok((out, report))
     }
+}
+
+/// What the chain driver plans: per walker its group, index, the group's walker count and the
+/// group's mutation budget (`None` under a time budget).
+type Plan = [(usize, usize, u64, Option<u64>)];
+
+/// The image and per-group statistics of `chains` so far: statistics merged in chain order,
+/// `b_k` refined with the large-step proposals, each group's splats scaled to estimate its
+/// image per mutation. Rays count the chains' rays only.
+fn develop<W: Walker>(
+    boots: &[Bootstrap],
+    chains: &[W],
+    plan: &Plan,
+    per_depth: &[SplatBuffer],
+    pixels: u64,
+) -> RenderOutput {
+    let depths = boots.len();
+    let mut stats: Vec<DepthStats> = (0..depths).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect();
+    let mut large: Vec<(f64, f64, u64)> = vec![(0.0, 0.0, 0); depths];
+    let mut rays = 0;
+    for (chain, &(k, ..)) in chains.iter().zip(plan) {
+        stats[k].merge(&chain.stats());
+        let l = chain.large();
+        large[k] = (large[k].0 + l.0, large[k].1 + l.1, large[k].2 + l.2);
+        rays += chain.rays();
+    }
+    let (w, h) = per_depth.first().map_or((0, 0), |b| (b.width, b.height));
+    let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
+    let mut invalid = 0;
+    for (k, d) in stats.iter_mut().enumerate() {
+        let boot = &boots[k];
+        let n = boot.values.len() as u64 + large[k].2;
+        let sum = boot.mean * boot.values.len() as f64 + large[k].0;
+        let sum2 = boot.sum2 + large[k].1;
+        d.b = if n > 0 { sum / n as f64 } else { 0.0 };
+        let var = if n > 1 { (sum2 / n as f64 - d.b * d.b).max(0.0) * n as f64 / (n - 1) as f64 } else { 0.0 };
+        d.b_rel_se = if d.b > 0.0 { (var / n as f64).sqrt() / d.b } else { 0.0 };
+        d.bootstrap_samples = boot.values.len() as u64;
+        d.large_step_samples = large[k].2;
+        d.invalid += boot.invalid;
+        invalid += d.invalid + per_depth[k].invalid;
+        if d.mutations == 0 {
+            continue;
+        }
+        // Each depth's splats estimate its image per mutation: N_pixels · b_k / M_k.
+        let layer = per_depth[k].image(d.b * pixels as f64 / d.mutations as f64);
+        for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
+            *p += *q;
+        }
+    }
+    let mutations: u64 = stats.iter().map(|d| d.mutations).sum();
+    let stats_total = RenderStats {
+        spp_completed: (mutations / pixels.max(1)) as u32,
+        pixel_samples: mutations,
+        rays,
+        invalid_samples: invalid,
+        seconds: 0.0,
+        cancelled: false,
+    };
+    RenderOutput { image, stats: stats_total, layers: Vec::new(), chains: stats }
 }
 
 impl ChainIntegrator for MmltIntegrator {

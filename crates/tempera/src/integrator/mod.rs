@@ -40,11 +40,68 @@ pub struct RenderSettings {
     pub threads: usize,
 }
 
-/// Interaction with a running render: a cancellation flag (Ctrl-C) and a progress callback that
-/// receives increments of completed pixel samples.
+/// Interaction with a running render: a cancellation flag (Ctrl-C), a progress callback that
+/// receives increments of completed pixel samples, and snapshots of the image so far.
 pub struct RenderControl<'a> {
     pub cancel: &'a AtomicBool,
     pub on_progress: &'a (dyn Fn(u64) + Sync),
+    /// Elapsed times, increasing, at which a render under a time budget hands `on_snapshot` the
+    /// image it has so far (index into this list, output with the statistics so far). A
+    /// snapshot is taken at the first point after its time where the render can develop an
+    /// image (between passes or rows for per-pixel estimators, between rounds of about one
+    /// mutation per pixel for Markov chains); `stats.seconds` says when. Times at or past the
+    /// budget are never reached: the render's own output is the last picture.
+    pub snapshots: &'a [Duration],
+    pub on_snapshot: &'a (dyn Fn(usize, &RenderOutput) + Sync),
+}
+
+fn no_snapshot(_: usize, _: &RenderOutput) {}
+
+impl<'a> RenderControl<'a> {
+    /// A control without snapshots.
+    pub fn new(cancel: &'a AtomicBool, on_progress: &'a (dyn Fn(u64) + Sync)) -> Self {
+        Self { cancel, on_progress, snapshots: &[], on_snapshot: &no_snapshot }
+    }
+
+    /// The same control, also taking snapshots at `times` (see [`RenderControl::snapshots`]).
+    pub fn with_snapshots(self, times: &'a [Duration], on_snapshot: &'a (dyn Fn(usize, &RenderOutput) + Sync)) -> Self {
+        Self { snapshots: times, on_snapshot, ..self }
+    }
+}
+
+/// When the next snapshot of a time-budget render is due.
+pub(crate) struct SnapshotClock<'a> {
+    start: std::time::Instant,
+    times: &'a [Duration],
+    next: usize,
+}
+
+impl<'a> SnapshotClock<'a> {
+    /// Snapshots only make sense (and are only taken) under a time budget.
+    pub(crate) fn new(start: std::time::Instant, control: &'a RenderControl, budget: Budget) -> Self {
+        let times = if matches!(budget, Budget::Time(_)) { control.snapshots } else { &[] };
+        Self { start, times, next: 0 }
+    }
+
+    /// The instant the next snapshot is due, if any is left.
+    pub(crate) fn next_due(&self) -> Option<std::time::Instant> {
+        self.times.get(self.next).map(|&t| self.start + t)
+    }
+
+    /// True when a snapshot is due now.
+    pub(crate) fn due(&self) -> bool {
+        self.next_due().is_some_and(|d| std::time::Instant::now() >= d)
+    }
+
+    /// Hands `output` to the control as every snapshot that is due now (several when one step
+    /// of the render outlasted more than one requested time).
+    pub(crate) fn deliver(&mut self, control: &RenderControl, output: &RenderOutput) {
+        let elapsed = self.start.elapsed();
+        while self.next < self.times.len() && self.times[self.next] <= elapsed {
+            (control.on_snapshot)(self.next, output);
+            self.next += 1;
+        }
+    }
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -15,7 +15,7 @@ pub(crate) fn render_with(
     threads: usize,
 ) -> RenderOutput {
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     integrator.render(scene, &RenderSettings { budget, seed, threads }, &control)
 }
 
@@ -132,7 +132,7 @@ fn time_budget_renders_every_pixel_and_cancellation_stops_early() {
             cancel.store(true, Ordering::Relaxed);
         }
     };
-    let control = RenderControl { cancel: &cancel, on_progress: &on_progress };
+    let control = RenderControl::new(&cancel, &on_progress);
     let settings = RenderSettings { budget: Budget::Samples(1 << 20), seed: 1, threads: 2 };
     let out = integrator.render(&scene, &settings, &control);
     assert!(out.stats.cancelled);
@@ -303,7 +303,7 @@ fn strategy_images_sum_to_the_bdpt_image() {
 
 fn mmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> (RenderOutput, MmltReport) {
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let m = MmltIntegrator { bootstrap: 200_000, ..MmltIntegrator::new(5) };
     m.render_with_report(scene, &RenderSettings { budget: Budget::Samples(mpp), seed, threads }, &control).unwrap()
 }
@@ -337,7 +337,7 @@ fn mmlt_passes_the_white_furnace() {
 fn mmlt_is_bit_identical_at_any_thread_count() {
     let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let m = MmltIntegrator { bootstrap: 5_000, chains: 8, ..MmltIntegrator::new(4) };
     let run = |threads| {
         m.render(&scene, &RenderSettings { budget: Budget::Samples(16), seed: 9, threads }, &control).image.pixels
@@ -370,7 +370,7 @@ fn mmlt_without_light_reaching_the_camera_is_a_clear_error() {
     nothing.set_film(crate::film::FilmDesc { width: 8, height: 8, ..Default::default() });
     let scene = nothing.build().unwrap();
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let m = MmltIntegrator { bootstrap: 1000, ..MmltIntegrator::new(3) };
     let err = m
         .try_render(&scene, &RenderSettings { budget: Budget::Samples(4), seed: 1, threads: 0 }, &control)
@@ -383,7 +383,7 @@ fn mmlt_without_light_reaching_the_camera_is_a_clear_error() {
 fn mmlt_time_budget_advances_every_depth() {
     let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let m = MmltIntegrator { bootstrap: 20_000, chains: 8, ..MmltIntegrator::new(4) };
     let budget = Budget::Time(std::time::Duration::from_millis(400));
     let (out, report) =
@@ -405,7 +405,7 @@ fn mmlt_time_budget_advances_every_depth() {
 
 fn pssmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> (RenderOutput, MmltReport) {
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let m = PssmltIntegrator { bootstrap: 200_000, ..PssmltIntegrator::new(5) };
     m.render_with_report(scene, &RenderSettings { budget: Budget::Samples(mpp), seed, threads }, &control).unwrap()
 }
@@ -440,11 +440,58 @@ fn pssmlt_passes_the_white_furnace() {
 fn pssmlt_is_bit_identical_at_any_thread_count() {
     let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
     let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+    let control = RenderControl::new(&cancel, &|_| {});
     let m = PssmltIntegrator { bootstrap: 5_000, chains: 8, ..PssmltIntegrator::new(4) };
     let run = |threads| {
         m.render(&scene, &RenderSettings { budget: Budget::Samples(8), seed: 9, threads }, &control).image.pixels
     };
     let one = run(1);
     assert!(one == run(2) && one == run(3));
+}
+
+/// Snapshots of a time-budget render: one per requested time, in order, each later than its
+/// time, with growing sample counts and an image that already estimates the right brightness.
+fn check_snapshots(integrator: &dyn Integrator, reference_mean: f64) {
+    use std::sync::Mutex;
+    use std::time::Duration;
+    let scene = crate::scenes::cornell_box(24, 24).build().unwrap();
+    let cancel = AtomicBool::new(false);
+    let taken: Mutex<Vec<(usize, RenderStats, f64)>> = Mutex::new(Vec::new());
+    let mean =
+        |img: &crate::texture::Image| img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64;
+    let on_snapshot = |i: usize, out: &RenderOutput| {
+        assert!(out.image.pixels.iter().all(|p| p.is_finite() && p.min_element() >= 0.0));
+        taken.lock().unwrap().push((i, out.stats.clone(), mean(&out.image)));
+    };
+    let times = [Duration::from_millis(150), Duration::from_millis(300), Duration::from_millis(450)];
+    let control = RenderControl::new(&cancel, &|_| {}).with_snapshots(&times, &on_snapshot);
+    let settings = RenderSettings { budget: Budget::Time(Duration::from_millis(700)), seed: 3, threads: 2 };
+    let out = integrator.render(&scene, &settings, &control);
+    let taken = taken.into_inner().unwrap();
+    let name = integrator.name();
+    assert_eq!(taken.iter().map(|t| t.0).collect::<Vec<_>>(), vec![0, 1, 2], "{name}");
+    for (i, stats, m) in &taken {
+        assert!(stats.seconds >= times[*i].as_secs_f64(), "{name}: snapshot {i} at {} s", stats.seconds);
+        assert!(stats.pixel_samples > 0 && stats.pixel_samples <= out.stats.pixel_samples, "{name}");
+        assert!((m / reference_mean - 1.0).abs() < 0.1, "{name}: snapshot {i} mean {m} vs {reference_mean}");
+    }
+    assert!(taken.windows(2).all(|w| w[0].1.pixel_samples <= w[1].1.pixel_samples), "{name}");
+    // A sample budget takes no snapshots.
+    let count = AtomicU64::new(0);
+    let on_snapshot = |_: usize, _: &RenderOutput| {
+        count.fetch_add(1, Ordering::Relaxed);
+    };
+    let control = RenderControl::new(&cancel, &|_| {}).with_snapshots(&times, &on_snapshot);
+    integrator.render(&scene, &RenderSettings { budget: Budget::Samples(1), seed: 3, threads: 2 }, &control);
+    assert_eq!(count.load(Ordering::Relaxed), 0, "{name}");
+}
+
+#[test]
+fn time_budget_renders_deliver_snapshots() {
+    let scene = crate::scenes::cornell_box(24, 24).build().unwrap();
+    let reference = render_with(&scene, &BdptIntegrator::new(4), Budget::Samples(256), 9, 0);
+    let mean = reference.image.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / reference.image.pixels.len() as f64;
+    check_snapshots(&PathIntegrator::new(4), mean);
+    check_snapshots(&BdptIntegrator::new(4), mean);
+    check_snapshots(&MmltIntegrator { bootstrap: 20_000, chains: 8, ..MmltIntegrator::new(4) }, mean);
 }

@@ -3,15 +3,17 @@
 //! that land on other pixels (light tracing) go to per-thread fixed-point splat buffers whose
 //! merge is order-independent. The image therefore depends only on the seed and the number of
 //! samples, never on the thread count. Passes double in size (1, 1, 2, 4, … samples per pixel)
-//! so that time budgets and Ctrl-C stop between passes or, within a pass, between rows.
+//! so that time budgets and Ctrl-C stop between passes or, within a pass, between rows. A pass
+//! stopped for a snapshot resumes where each tile stopped.
 
-use super::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats};
+use super::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats, SnapshotClock};
 use crate::camera::Camera;
 use crate::film::{Film, SplatBuffer, Tile, TileBuffer};
 use crate::geometry::Ray;
 use crate::math::{Rgb, Vec2};
 use crate::sampler::{IndependentSampler, Sampler, Stream};
 use crate::scene::Scene;
+use crate::texture::Image;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -51,7 +53,8 @@ struct TileResult {
     buffer: TileBuffer,
     samples: u64,
     rays: u64,
-    stopped: bool,
+    /// The first row of the tile this pass has not rendered (the tile's end when it is done).
+    next_row: u32,
 }
 
 struct Pass<'a> {
@@ -61,6 +64,8 @@ struct Pass<'a> {
     /// Stop at this instant (never during the first pass, so every pixel gets a sample).
     deadline: Option<Instant>,
     control: &'a RenderControl<'a>,
+    /// Per tile, the row this pass starts at (after a snapshot interrupted it).
+    resume: &'a [u32],
 }
 
 impl Pass<'_> {
@@ -68,16 +73,21 @@ impl Pass<'_> {
         self.control.cancel.load(Ordering::Relaxed) || self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 
-    fn render_tile<E: PixelEstimator>(&self, estimator: &E, tile: Tile, buffers: &mut ThreadBuffers) -> TileResult {
+    fn render_tile<E: PixelEstimator>(
+        &self,
+        estimator: &E,
+        (index, tile): (usize, Tile),
+        buffers: &mut ThreadBuffers,
+    ) -> TileResult {
         let film = &self.scene.film;
         let camera: &Camera = &self.scene.camera;
         let mut buffer = TileBuffer::new(film, tile);
-        let (mut samples, mut stopped) = (0u64, false);
+        let mut samples = 0u64;
         let ThreadBuffers { splats, layers } = buffers;
         let mut ctx = SampleCtx { rays: 0, raster: Vec2::ZERO, splats, layers };
-        for y in tile.y0..tile.y1 {
+        let mut next_row = self.resume[index];
+        for y in next_row..tile.y1 {
             if self.should_stop() {
-                stopped = true;
                 break;
             }
             for x in tile.x0..tile.x1 {
@@ -97,9 +107,24 @@ impl Pass<'_> {
                 }
             }
             (self.control.on_progress)(u64::from(tile.x1 - tile.x0) * self.samples.len() as u64);
+            next_row = y + 1;
         }
-        TileResult { buffer, samples, rays: ctx.rays, stopped }
+        TileResult { buffer, samples, rays: ctx.rays, next_row }
     }
+}
+
+/// The image of `film` plus the splats so far, which estimate the image per sample.
+fn develop(film: &Film, splats: &SplatBuffer, splatting: bool, pixel_samples: u64) -> Image {
+    let mut image = film.develop();
+    let (fw, fh) = (film.desc.width, film.desc.height);
+    let per_sample = f64::from(fw) * f64::from(fh) / (pixel_samples.max(1) as f64);
+    if splatting && pixel_samples > 0 {
+        let splat = splats.image(per_sample);
+        for (p, s) in image.pixels.iter_mut().zip(&splat.pixels) {
+            *p += *s;
+        }
+    }
+    image
 }
 
 /// Renders `scene` with `estimator` under `settings`.
@@ -130,17 +155,25 @@ pub fn render_tiles<E: PixelEstimator>(
         Budget::Samples(n) => (n, None),
         Budget::Time(d) => (u32::MAX, Some(start + d)),
     };
+    let mut clock = SnapshotClock::new(start, control, settings.budget);
+    let mut resume: Vec<u32> = tiles.iter().map(|t| t.y0).collect();
     let mut done = 0u32;
     while done < max_spp {
         let size = done.max(1).min(max_spp - done);
+        // Later passes stop at the deadline or at the next snapshot, whichever comes first.
+        let stop_at = match (deadline, clock.next_due()) {
+            (Some(d), Some(s)) => Some(d.min(s)),
+            (d, s) => d.or(s),
+        };
         let pass = Pass {
             scene,
             seed: settings.seed,
             samples: done..done + size,
-            deadline: if done == 0 { None } else { deadline },
+            deadline: if done == 0 { None } else { stop_at },
             control,
+            resume: &resume,
         };
-        if control.cancel.load(Ordering::Relaxed) || pass.deadline.is_some_and(|d| Instant::now() >= d) {
+        if control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| done > 0 && Instant::now() >= d) {
             break;
         }
         // One splat buffer per worker thread, locked once per tile (never per sample); the
@@ -148,24 +181,44 @@ pub fn render_tiles<E: PixelEstimator>(
         let results: Vec<TileResult> = pool.install(|| {
             tiles
                 .par_iter()
-                .map(|&t| {
+                .copied()
+                .enumerate()
+                .map(|t| {
                     let index = rayon::current_thread_index().unwrap_or(0) % thread_buffers.len();
                     let mut buffers = thread_buffers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
                     pass.render_tile(estimator, t, &mut buffers)
                 })
                 .collect()
         });
-        let mut stopped = false;
-        for r in &results {
+        let mut finished = true;
+        for (r, (row, tile)) in results.iter().zip(resume.iter_mut().zip(&tiles)) {
             film.merge(&r.buffer);
             stats.pixel_samples += r.samples;
             stats.rays += r.rays;
-            stopped |= r.stopped;
+            finished &= r.next_row == tile.y1;
+            *row = r.next_row;
         }
-        if stopped {
+        if clock.due() && !control.cancel.load(Ordering::Relaxed) {
+            let mut splats = SplatBuffer::new(sw, sh);
+            for buffers in &thread_buffers {
+                splats.merge(&buffers.lock().unwrap_or_else(std::sync::PoisonError::into_inner).splats);
+            }
+            let snapshot = RenderOutput {
+                image: develop(&film, &splats, E::SPLATS, stats.pixel_samples),
+                stats: RenderStats { spp_completed: done, seconds: start.elapsed().as_secs_f64(), ..stats.clone() },
+                layers: Vec::new(),
+                chains: Vec::new(),
+            };
+            clock.deliver(control, &snapshot);
+        }
+        if finished {
+            done += size;
+            for (row, tile) in resume.iter_mut().zip(&tiles) {
+                *row = tile.y0;
+            }
+        } else if control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        done += size;
     }
     let mut splats = SplatBuffer::new(sw, sh);
     let mut layers: Vec<SplatBuffer> = (0..layer_count).map(|_| SplatBuffer::new(fw, fh)).collect();
@@ -180,15 +233,8 @@ pub fn render_tiles<E: PixelEstimator>(
     stats.invalid_samples = film.invalid_samples + splats.invalid;
     stats.cancelled = control.cancel.load(Ordering::Relaxed);
     stats.seconds = start.elapsed().as_secs_f64();
-    let mut image = film.develop();
-    // Splats estimate the image per sample: divide by the samples per pixel.
+    let image = develop(&film, &splats, E::SPLATS, stats.pixel_samples);
     let per_sample = f64::from(fw) * f64::from(fh) / (stats.pixel_samples.max(1) as f64);
-    if E::SPLATS && stats.pixel_samples > 0 {
-        let splat = splats.image(per_sample);
-        for (p, s) in image.pixels.iter_mut().zip(&splat.pixels) {
-            *p += *s;
-        }
-    }
     let layers = layers.iter().map(|l| l.image(per_sample)).collect();
     RenderOutput { image, stats, layers, chains: Vec::new() }
 }

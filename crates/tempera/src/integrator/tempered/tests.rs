@@ -221,7 +221,7 @@ mod integrator {
         let mut scene = crate::scenes::default_scene().build().unwrap();
         scene.set_resolution(16, 16);
         let cancel = AtomicBool::new(false);
-        let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+        let control = RenderControl::new(&cancel, &|_| {});
         let mmlt = MmltIntegrator { bootstrap: 5_000, chains: 8, ..MmltIntegrator::new(5) };
         let tempered = TemperedIntegrator { bootstrap: 5_000, chains: 8, replicas: 1, ..TemperedIntegrator::new(5) };
         let a = mmlt.render(&scene, &settings(16, 3, 0), &control);
@@ -237,7 +237,7 @@ mod integrator {
         let cornell = crate::scenes::cornell_box(32, 32).build().unwrap();
         let furnace = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
         let cancel = AtomicBool::new(false);
-        let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+        let control = RenderControl::new(&cancel, &|_| {});
         let bdpt = render_with(&cornell, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
         let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
         for swap in [Swap::Neighbor, Swap::EquiEnergy, Swap::Permutation] {
@@ -266,7 +266,7 @@ mod integrator {
         let mut scene = crate::scenes::default_scene().build().unwrap();
         scene.set_resolution(24, 24);
         let cancel = AtomicBool::new(false);
-        let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+        let control = RenderControl::new(&cancel, &|_| {});
         let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(512), 1, 0);
         let mean = |img: &crate::texture::Image| {
             img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64
@@ -334,7 +334,7 @@ mod tuning {
     fn the_burn_in_widens_the_ladder_while_acceptance_is_above_the_target() {
         let scene = glossy_corner();
         let cancel = AtomicBool::new(false);
-        let control = RenderControl { cancel: &cancel, on_progress: &|_| {} };
+        let control = RenderControl::new(&cancel, &|_| {});
         let run = |burn_in| {
             let t =
                 TemperedIntegrator { bootstrap: 20_000, chains: 8, replicas: 4, burn_in, ..TemperedIntegrator::new(3) };
