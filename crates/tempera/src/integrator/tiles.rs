@@ -85,8 +85,9 @@ impl Pass<'_> {
         let mut samples = 0u64;
         let ThreadBuffers { splats, layers } = buffers;
         let mut ctx = SampleCtx { rays: 0, raster: Vec2::ZERO, splats, layers };
-        let mut next_row = self.resume[index];
-        for y in next_row..tile.y1 {
+        let first_row = self.resume[index];
+        let mut next_row = first_row;
+        for y in first_row..tile.y1 {
             if self.should_stop() {
                 break;
             }
