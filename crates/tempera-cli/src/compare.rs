@@ -1,5 +1,5 @@
 //! `tempera compare IMAGE REFERENCE`: error metrics of an image against a reference, the ratio
-//! of their mean luminances, and optionally a false-colour error map.
+//! of their mean luminances, and optionally a false-colour error map (relMSE or FLIP).
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -16,7 +16,8 @@ pub struct CompareArgs {
     /// Metrics to print (default: all).
     #[arg(long, value_parser = METRICS.to_vec())]
     pub metric: Vec<String>,
-    /// Write the per-pixel relMSE as a false-colour image with a legend (PNG, EXR or PFM).
+    /// Write a false-colour error map with a legend (PNG, EXR or PFM): the per-pixel FLIP error
+    /// when the first `--metric` is flip, else the per-pixel relMSE.
     #[arg(long, value_name = "FILE.png")]
     pub error_map: Option<PathBuf>,
 }
@@ -40,7 +41,12 @@ pub fn run(args: CompareArgs) -> Result<()> {
     }
     println!("mean ratio {:.6}", c.mean_ratio);
     if let Some(path) = &args.error_map {
-        let map = metrics::error_map(&image, &reference).map_err(anyhow::Error::msg)?;
+        let map = if args.metric.first().is_some_and(|m| m == "flip") {
+            metrics::flip_error_map(&image, &reference)
+        } else {
+            metrics::error_map(&image, &reference)
+        };
+        let map = map.map_err(anyhow::Error::msg)?;
         write_image(path, &map, &WriteOptions::default())
             .with_context(|| format!("cannot write {}", path.display()))?;
     }

@@ -239,10 +239,23 @@ fn compare_prints_metrics_and_writes_an_error_map() {
     let out = tempera().current_dir(&dir).args(["compare", "a.exr", "r.pfm", "--error-map", "e.png"]).output().unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
     let text = String::from_utf8_lossy(&out.stdout);
-    for key in ["mse", "rmse", "relmse", "smape", "mean ratio"] {
+    for key in ["mse", "rmse", "relmse", "smape", "flip", "mean ratio"] {
         assert!(text.contains(key), "{key} missing: {text}");
     }
     assert!(dir.join("e.png").exists());
+    let flip = tempera()
+        .current_dir(&dir)
+        .args(["compare", "a.exr", "r.pfm", "--metric", "flip", "--error-map", "f.png"])
+        .output()
+        .unwrap();
+    assert!(flip.status.success(), "{}", stderr(&flip));
+    let value: f64 = String::from_utf8_lossy(&flip.stdout)
+        .lines()
+        .find_map(|l| l.strip_prefix("flip"))
+        .and_then(|v| v.trim().parse().ok())
+        .expect("a FLIP value");
+    assert!(value > 0.0 && value < 1.0, "{value}");
+    assert!(dir.join("f.png").exists());
     let same = tempera().current_dir(&dir).args(["compare", "r.pfm", "r.pfm", "--metric", "relmse"]).output().unwrap();
     let text = String::from_utf8_lossy(&same.stdout);
     assert!(text.contains("relmse  0.000000e0") && text.contains("mean ratio 1.000000"), "{text}");

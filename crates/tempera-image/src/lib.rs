@@ -3,6 +3,7 @@
 //! sRGB transfer functions. Formats are chosen by file extension.
 
 mod color;
+pub mod flip;
 pub mod metrics;
 mod pfm;
 

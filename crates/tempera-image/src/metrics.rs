@@ -4,10 +4,12 @@
 //! - relMSE: `mean((I − R)² / (R² + ε))` on luminance (Rec. 709 weights), `ε = 0.01`, the
 //!   convention of Rousselle et al. and later MCMC rendering papers.
 //! - SMAPE: `mean(|I − R| / (|I| + |R| + ε))` over pixels and channels, `ε = 0.01`, in `[0, 1]`.
+//! - FLIP: mean LDR-FLIP error after clamping and sRGB encoding (see [`crate::flip`]).
 //! - The mean ratio: mean luminance of `I` over mean luminance of `R`.
 //!
-//! The error map shows the per-pixel relMSE term on a logarithmic scale from 10⁻⁴ to 10⁰ with
-//! a viridis-like colour map, and a colour bar with decade labels beneath the image.
+//! The relMSE error map shows the per-pixel relMSE term on a logarithmic scale from 10⁻⁴ to
+//! 10⁰ with a viridis-like colour map, and a colour bar with decade labels beneath the image;
+//! the FLIP error map shows the FLIP map in FLIP's magma colours with a bar from 0 to 1.
 
 use tempera::math::{Rgb, luminance};
 use tempera::texture::Image;
@@ -16,7 +18,7 @@ use tempera::texture::Image;
 pub const EPSILON: f64 = 0.01;
 
 /// The metrics [`compare`] computes, by name.
-pub const METRICS: &[&str] = &["mse", "rmse", "relmse", "smape"];
+pub const METRICS: &[&str] = &["mse", "rmse", "relmse", "smape", "flip"];
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Comparison {
@@ -24,6 +26,7 @@ pub struct Comparison {
     pub rmse: f64,
     pub relmse: f64,
     pub smape: f64,
+    pub flip: f64,
     pub mean_ratio: f64,
 }
 
@@ -34,6 +37,7 @@ impl Comparison {
             "rmse" => Some(self.rmse),
             "relmse" => Some(self.relmse),
             "smape" => Some(self.smape),
+            "flip" => Some(self.flip),
             _ => None,
         }
     }
@@ -75,6 +79,7 @@ pub fn compare(image: &Image, reference: &Image) -> Result<Comparison, String> {
         rmse: mse.sqrt(),
         relmse: rel / n,
         smape: smape / (3.0 * n),
+        flip: crate::flip::flip(image, reference)?.0,
         mean_ratio: if sum_r != 0.0 { sum_i / sum_r } else { f64::NAN },
     })
 }
@@ -108,36 +113,30 @@ fn glyph(c: char) -> [u8; 5] {
         '2' => [7, 1, 7, 4, 7],
         '3' => [7, 1, 7, 1, 7],
         '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '.' => [0, 0, 0, 0, 2],
         'e' => [0, 7, 7, 4, 7],
         '-' => [0, 0, 7, 0, 0],
         _ => [0; 5],
     }
 }
 
-/// The false-colour map of the per-pixel relMSE terms, with a colour bar and labels
-/// (`1e-4` … `1e0`) beneath; linear RGB, ready for any writer.
-pub fn error_map(image: &Image, reference: &Image) -> Result<Image, String> {
-    compare(image, reference)?;
-    let (w, h) = (image.width, image.height);
-    let (bar, labels) = (12, 9);
-    let height = h + 4 + bar + labels;
+/// `map` (`w × h` pixels) with a colour bar of `colour` over `[0, 1]` beneath it and white
+/// `labels` at their positions along the bar (0 = left end, 1 = right end).
+fn with_legend(map: Vec<Rgb>, w: usize, h: usize, colour: impl Fn(f64) -> Rgb, labels: &[(f64, String)]) -> Image {
+    let (bar, label_rows) = (12, 9);
+    let height = h + 4 + bar + label_rows;
     let mut out = Image::new(w, height, vec![Rgb::ZERO; w * height]);
-    for (p, (&i, &r)) in out.pixels.iter_mut().zip(image.pixels.iter().zip(&reference.pixels)) {
-        let e = rel_se(i, r).max(1e-30).log10();
-        *p = colour((e - LOW) / (HIGH - LOW));
-    }
+    out.pixels[..w * h].copy_from_slice(&map);
     for x in 0..w {
         let c = colour(x as f64 / (w.max(2) - 1) as f64);
         for y in h + 4..h + 4 + bar {
             out.pixels[y * w + x] = c;
         }
     }
-    // Decade labels at their positions along the bar, in white.
-    let decades = (HIGH - LOW) as usize;
-    for d in 0..=decades {
-        let text = format!("1e{}", LOW as i32 + d as i32);
+    for (position, text) in labels {
         let width = text.len() * 4;
-        let centre = d * (w - 1) / decades;
+        let centre = (position.clamp(0.0, 1.0) * (w.max(1) - 1) as f64).round() as usize;
         let x0 = centre.saturating_sub(width / 2).min(w.saturating_sub(width));
         for (k, ch) in text.chars().enumerate() {
             for (row, bits) in glyph(ch).iter().enumerate() {
@@ -150,7 +149,36 @@ pub fn error_map(image: &Image, reference: &Image) -> Result<Image, String> {
             }
         }
     }
-    Ok(out)
+    out
+}
+
+/// The false-colour map of the per-pixel relMSE terms, with a colour bar and labels
+/// (`1e-4` … `1e0`) beneath; linear RGB, ready for any writer.
+pub fn error_map(image: &Image, reference: &Image) -> Result<Image, String> {
+    compare(image, reference)?;
+    let (w, h) = (image.width, image.height);
+    let map = image
+        .pixels
+        .iter()
+        .zip(&reference.pixels)
+        .map(|(&i, &r)| colour((rel_se(i, r).max(1e-30).log10() - LOW) / (HIGH - LOW)))
+        .collect();
+    let decades = (HIGH - LOW) as usize;
+    let labels: Vec<(f64, String)> =
+        (0..=decades).map(|d| (d as f64 / decades as f64, format!("1e{}", LOW as i32 + d as i32))).collect();
+    Ok(with_legend(map, w, h, colour, &labels))
+}
+
+/// The FLIP error map in FLIP's magma colours with a colour bar from 0 to 1 beneath.
+pub fn flip_error_map(image: &Image, reference: &Image) -> Result<Image, String> {
+    let (_, values) = crate::flip::flip(image, reference)?;
+    let (w, h) = (image.width, image.height);
+    let map = crate::flip::flip_colours(&values, w, h).pixels;
+    let ramp: Vec<f32> = (0..256).map(|i| i as f32 / 255.0).collect();
+    let ramp = crate::flip::flip_colours(&ramp, 256, 1).pixels;
+    let colour = |t: f64| ramp[(t.clamp(0.0, 1.0) * 255.0).round() as usize];
+    let labels = [(0.0, "0".to_owned()), (0.5, "0.5".to_owned()), (1.0, "1".to_owned())];
+    Ok(with_legend(map, w, h, colour, &labels))
 }
 
 #[cfg(test)]
@@ -191,5 +219,19 @@ mod tests {
         let bar_row = &map.pixels[5 * 20..6 * 20];
         assert!(luminance(bar_row[0]) < luminance(bar_row[19]));
         assert!(map.pixels[(1 + 4 + 12) * 20..].contains(&Rgb::ONE));
+    }
+
+    #[test]
+    fn flip_is_reported_and_mapped_with_a_legend() {
+        let r = Image::new(16, 16, vec![Rgb::splat(0.5); 256]);
+        let mut i = r.clone();
+        i.pixels[0] = Rgb::ONE;
+        let c = compare(&i, &r).unwrap();
+        assert!(c.flip > 0.0 && c.flip < 0.1, "{c:?}");
+        assert_eq!(c.get("flip"), Some(c.flip));
+        let map = flip_error_map(&i, &r).unwrap();
+        assert_eq!((map.width, map.height), (16, 16 + 4 + 12 + 9));
+        // The differing pixel is brighter in the map than the untouched far corner.
+        assert!(luminance(map.pixels[0]) > luminance(map.pixels[255]));
     }
 }
