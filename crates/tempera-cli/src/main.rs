@@ -1,6 +1,7 @@
 //! The `tempera` command-line renderer: one module per subcommand.
 
 mod compare;
+mod experiment;
 mod info;
 mod render;
 mod scene;
@@ -24,6 +25,9 @@ enum Command {
     Info(info::InfoArgs),
     /// Compare an image with a reference: MSE, RMSE, relMSE, SMAPE, ratio of means, error map.
     Compare(compare::CompareArgs),
+    /// Render scenes with several methods at equal time against a reference; write images,
+    /// results.csv, results.json and report.html.
+    Experiment(experiment::ExperimentArgs),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +36,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(*args),
         Command::Info(args) => info::run(args),
         Command::Compare(args) => compare::run(args),
+        Command::Experiment(args) => experiment::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -128,7 +128,7 @@ fn parse_ladder(s: &str) -> Result<Ladder, String> {
     Ok(Ladder(values))
 }
 
-fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     let err = || format!("expected WIDTHxHEIGHT such as 640x480, got '{s}'");
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(err)?;
     let (w, h): (u32, u32) = (w.trim().parse().map_err(|_| err())?, h.trim().parse().map_err(|_| err())?);
@@ -138,10 +138,10 @@ fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-static CANCEL: AtomicBool = AtomicBool::new(false);
+pub static CANCEL: AtomicBool = AtomicBool::new(false);
 
 /// Ctrl-C asks the render to stop and write what it has; a second Ctrl-C exits at once.
-fn install_interrupt_handler() {
+pub fn install_interrupt_handler() {
     let installed = ctrlc::set_handler(|| {
         if CANCEL.swap(true, Ordering::SeqCst) {
             std::process::exit(130);
@@ -179,7 +179,7 @@ fn outputs(args: &RenderArgs, scene: &Scene) -> Vec<PathBuf> {
 }
 
 /// The integrator to use: the command line's, else the scene's when Tempera has it, else path.
-fn integrator_name(args: &RenderArgs, scene: &Scene) -> String {
+pub fn integrator_name(args: &RenderArgs, scene: &Scene) -> String {
     if let Some(name) = &args.integrator {
         return name.clone();
     }
@@ -206,20 +206,10 @@ fn progress_bar(args: &RenderArgs, budget: Budget, pixels: u64) -> ProgressBar {
     bar
 }
 
-pub fn run(args: RenderArgs) -> Result<()> {
-    check_outputs(&args.output)?;
-    let loaded = scene::load(args.scene.as_deref(), args.strict)?;
-    scene::print_warnings(&loaded.warnings, 20);
-    let mut scene = loaded.scene;
-    if let Some((w, h)) = args.resolution {
-        scene.set_resolution(w, h);
-    }
-    let outputs = outputs(&args, &scene);
+/// The integrator `name` with the options `args` give (the scene's maximum depth unless
+/// `--maxdepth` overrides it).
+pub fn build_integrator(args: &RenderArgs, scene: &Scene, name: &str) -> Result<Box<dyn integrator::Integrator>> {
     let max_depth = args.maxdepth.unwrap_or(scene.defaults.max_depth);
-    let name = integrator_name(&args, &scene);
-    if args.strategy_images.is_some() && name != "bdpt" {
-        bail!("--strategy-images needs --integrator bdpt");
-    }
     let heuristic = if args.mis == "balance" { Heuristic::Balance } else { Heuristic::Power };
     // A ladder fixes the number of replicas; both given must agree.
     let replicas = match (args.replicas, &args.ladder) {
@@ -250,7 +240,23 @@ pub fn run(args: RenderArgs) -> Result<()> {
         burn_in: args.burn_in,
         swap_target: args.swap_target.map(f64::from),
     };
-    let integrator = integrator::create(&name, &options).with_context(|| format!("unknown integrator '{name}'"))?;
+    integrator::create(name, &options).with_context(|| format!("unknown integrator '{name}'"))
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    check_outputs(&args.output)?;
+    let loaded = scene::load(args.scene.as_deref(), args.strict)?;
+    scene::print_warnings(&loaded.warnings, 20);
+    let mut scene = loaded.scene;
+    if let Some((w, h)) = args.resolution {
+        scene.set_resolution(w, h);
+    }
+    let outputs = outputs(&args, &scene);
+    let name = integrator_name(&args, &scene);
+    if args.strategy_images.is_some() && name != "bdpt" {
+        bail!("--strategy-images needs --integrator bdpt");
+    }
+    let integrator = build_integrator(&args, &scene, &name)?;
     let budget = match args.time {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),
         None => Budget::Samples(args.mpp.or(args.spp).unwrap_or(scene.defaults.spp)),

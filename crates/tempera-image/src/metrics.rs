@@ -156,17 +156,18 @@ fn with_legend(map: Vec<Rgb>, w: usize, h: usize, colour: impl Fn(f64) -> Rgb, l
 /// (`1e-4` … `1e0`) beneath; linear RGB, ready for any writer.
 pub fn error_map(image: &Image, reference: &Image) -> Result<Image, String> {
     compare(image, reference)?;
-    let (w, h) = (image.width, image.height);
-    let map = image
-        .pixels
-        .iter()
-        .zip(&reference.pixels)
-        .map(|(&i, &r)| colour((rel_se(i, r).max(1e-30).log10() - LOW) / (HIGH - LOW)))
-        .collect();
+    let values: Vec<f64> = image.pixels.iter().zip(&reference.pixels).map(|(&i, &r)| rel_se(i, r)).collect();
+    Ok(value_map(&values, image.width, image.height))
+}
+
+/// Per-pixel values (such as relative variances) in the relMSE map's colours and log scale
+/// (10⁻⁴ … 10⁰), with the same legend; `values` has `width × height` entries.
+pub fn value_map(values: &[f64], width: usize, height: usize) -> Image {
+    let map = values.iter().map(|&v| colour((v.max(1e-30).log10() - LOW) / (HIGH - LOW))).collect();
     let decades = (HIGH - LOW) as usize;
     let labels: Vec<(f64, String)> =
         (0..=decades).map(|d| (d as f64 / decades as f64, format!("1e{}", LOW as i32 + d as i32))).collect();
-    Ok(with_legend(map, w, h, colour, &labels))
+    with_legend(map, width, height, colour, &labels)
 }
 
 /// The FLIP error map in FLIP's magma colours with a colour bar from 0 to 1 beneath.

@@ -1,0 +1,228 @@
+//! The experiment file (`tempera experiment CONFIG.toml`): scenes × methods × time budgets ×
+//! seeds, and how the reference is obtained. Keys are documented in the README; unknown keys
+//! are errors (a misspelt key would otherwise be silently ignored).
+
+use anyhow::{Context, Result, bail};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// Folder for everything the run writes (relative to the experiment file).
+    pub output: PathBuf,
+    /// Worker threads of every render (0: all cores).
+    #[serde(default)]
+    pub threads: usize,
+    #[serde(default)]
+    pub reference: Reference,
+    #[serde(rename = "scene")]
+    pub scenes: Vec<SceneEntry>,
+    #[serde(rename = "method")]
+    pub methods: Vec<Method>,
+    pub budget: BudgetEntry,
+}
+
+/// Either a given image or a method rendered once with a long budget (and cached).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Reference {
+    /// A reference image (EXR or PFM); only with a single scene (else per scene).
+    pub image: Option<PathBuf>,
+    /// Integrator of the rendered reference (default bdpt).
+    pub method: Option<String>,
+    /// More `tempera render` flags for the reference.
+    #[serde(default)]
+    pub args: Vec<String>,
+    pub spp: Option<u32>,
+    pub seconds: Option<f64>,
+    /// Seed of the reference render (default 1000, apart from the runs' seeds).
+    pub seed: Option<u64>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneEntry {
+    pub name: String,
+    /// Scene file (relative to the experiment file); omitted: the embedded default scene.
+    pub file: Option<PathBuf>,
+    /// WIDTHxHEIGHT override.
+    pub resolution: Option<String>,
+    /// Maximum path depth override for every method and the reference.
+    pub maxdepth: Option<u32>,
+    /// This scene's reference image (overrides `[reference]`).
+    pub reference: Option<PathBuf>,
+    /// Skip the scene with a message when its file is missing (instead of failing).
+    #[serde(default)]
+    pub optional: bool,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Method {
+    pub name: String,
+    pub integrator: String,
+    /// More `tempera render` flags (budget, seed, output and scene flags are the experiment's).
+    #[serde(default)]
+    pub args: Vec<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BudgetEntry {
+    /// Equal-time budgets in seconds.
+    pub seconds: Vec<f64>,
+    /// Extra times (seconds) at which each run records its image for convergence curves.
+    #[serde(default)]
+    pub snapshots: Vec<f64>,
+    #[serde(default = "default_seeds")]
+    pub seeds: Vec<u64>,
+}
+
+fn default_seeds() -> Vec<u64> {
+    vec![1]
+}
+
+/// Names become folder and file names: keep them to letters, digits, `-`, `_` and `.`.
+fn check_name(kind: &str, name: &str) -> Result<()> {
+    let ok = !name.is_empty()
+        && !name.starts_with('.')
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.' | '+'));
+    if !ok {
+        bail!("{kind} name '{name}' must be made of letters, digits, '-', '_', '+' and '.'");
+    }
+    Ok(())
+}
+
+impl Config {
+    /// Reads and checks `path`; relative paths inside become relative to its folder.
+    pub fn load(path: &Path) -> Result<Config> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let mut config: Config = toml::from_str(&text).map_err(|e| {
+            // toml's messages carry the line and column; prefix the file like the scene loaders.
+            anyhow::anyhow!("{}: {e}", path.display())
+        })?;
+        let base = path.parent().unwrap_or(Path::new(""));
+        let resolve = |p: &mut PathBuf| {
+            if p.is_relative() {
+                *p = base.join(&*p);
+            }
+        };
+        resolve(&mut config.output);
+        if let Some(image) = config.reference.image.as_mut() {
+            resolve(image);
+        }
+        for scene in &mut config.scenes {
+            scene.file.as_mut().map(resolve);
+            scene.reference.as_mut().map(resolve);
+        }
+        config.check().with_context(|| format!("{}: invalid experiment", path.display()))?;
+        Ok(config)
+    }
+
+    fn check(&self) -> Result<()> {
+        if self.scenes.is_empty() || self.methods.is_empty() {
+            bail!("needs at least one [[scene]] and one [[method]]");
+        }
+        let b = &self.budget;
+        if b.seconds.is_empty() || b.seeds.is_empty() {
+            bail!("[budget] needs at least one time in `seconds` and one seed in `seeds`");
+        }
+        if b.seconds.iter().chain(&b.snapshots).any(|t| !t.is_finite() || *t <= 0.0) {
+            bail!("[budget] times must be positive numbers of seconds");
+        }
+        for (i, s) in self.scenes.iter().enumerate() {
+            check_name("scene", &s.name)?;
+            if self.scenes[..i].iter().any(|o| o.name == s.name) {
+                bail!("two scenes are called '{}'", s.name);
+            }
+            if let Some(r) = &s.resolution {
+                crate::render::parse_resolution(r).map_err(|e| anyhow::anyhow!("scene '{}': {e}", s.name))?;
+            }
+        }
+        for (i, m) in self.methods.iter().enumerate() {
+            check_name("method", &m.name)?;
+            if self.methods[..i].iter().any(|o| o.name == m.name) {
+                bail!("two methods are called '{}'", m.name);
+            }
+        }
+        let r = &self.reference;
+        if r.image.is_some() && self.scenes.len() > 1 {
+            bail!("[reference] image serves a single scene; give each [[scene]] its own `reference`");
+        }
+        if r.image.is_some() && (r.method.is_some() || r.spp.is_some() || r.seconds.is_some()) {
+            bail!("[reference] is either an image or a method with a budget, not both");
+        }
+        if r.spp.is_some() && r.seconds.is_some() {
+            bail!("[reference] takes `spp` or `seconds`, not both");
+        }
+        if r.seconds.is_some_and(|t| !t.is_finite() || t <= 0.0) || r.spp == Some(0) {
+            bail!("[reference] budget must be positive");
+        }
+        Ok(())
+    }
+
+    /// Every time a run records: the snapshots and the budgets, sorted, without repeats; the
+    /// run lasts the longest.
+    pub fn times(&self) -> Vec<f64> {
+        let mut times: Vec<f64> = self.budget.seconds.iter().chain(&self.budget.snapshots).copied().collect();
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        let longest = self.budget.seconds.iter().copied().fold(0.0, f64::max);
+        times.retain(|&t| t <= longest);
+        times
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Config> {
+        let dir = std::env::temp_dir().join(format!("tempera-config-{}", std::process::id()));
+        std::fs::create_dir_all(&dir)?;
+        let path = dir.join(format!("c{}.toml", text.len()));
+        std::fs::write(&path, text)?;
+        Config::load(&path)
+    }
+
+    const BASE: &str = r#"
+output = "out"
+[reference]
+method = "bdpt"
+spp = 64
+[[scene]]
+name = "default"
+resolution = "32x32"
+[[method]]
+name = "mmlt"
+integrator = "mmlt"
+[budget]
+seconds = [2, 1]
+snapshots = [0.5, 1, 4]
+seeds = [1, 2]
+"#;
+
+    #[test]
+    fn the_documented_shape_loads() {
+        let c = parse(BASE).unwrap();
+        assert!(c.output.ends_with("out") && c.output.is_absolute() || c.output.components().count() > 1);
+        assert_eq!(c.times(), vec![0.5, 1.0, 2.0], "snapshots past the longest budget are dropped");
+        assert_eq!(c.budget.seeds, vec![1, 2]);
+        assert_eq!(c.reference.spp, Some(64));
+    }
+
+    #[test]
+    fn mistakes_are_errors_naming_the_problem() {
+        let typo = parse(&BASE.replace("snapshots", "snapshot")).unwrap_err();
+        assert!(format!("{typo:#}").contains("unknown field `snapshot`"), "{typo:#}");
+        let line = parse(&BASE.replace("spp = 64", "spp = \"many\"")).unwrap_err();
+        assert!(format!("{line:#}").contains("line 5"), "{line:#}");
+        let both = parse(&BASE.replace("spp = 64", "spp = 64\nseconds = 3")).unwrap_err();
+        assert!(format!("{both:#}").contains("not both"), "{both:#}");
+        let name = parse(&BASE.replace("name = \"mmlt\"", "name = \"a/b\"")).unwrap_err();
+        assert!(format!("{name:#}").contains("method name 'a/b'"), "{name:#}");
+        let res = parse(&BASE.replace("32x32", "32")).unwrap_err();
+        assert!(format!("{res:#}").contains("WIDTHxHEIGHT"), "{res:#}");
+    }
+}

@@ -1,0 +1,164 @@
+//! The reference of each scene: a given image, or a render by a named method with a long
+//! budget, cached in `reference/SCENE.exr` beside a description of how it was made
+//! (`reference/SCENE.json`): a changed description renders it again.
+
+use super::config::Config;
+use super::runs::{PreparedScene, parse_flags};
+use crate::render::CANCEL;
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+use tempera::integrator::{Budget, RenderControl, RenderSettings};
+use tempera::texture::Image;
+use tempera_image::{ColorEncoding, WriteOptions, read_image, write_image};
+
+/// Samples per pixel of a rendered reference when the file gives no budget.
+pub const DEFAULT_SPP: u32 = 1024;
+/// Seed of a rendered reference when the file gives none (apart from the runs' small seeds).
+pub const DEFAULT_SEED: u64 = 1000;
+
+pub struct Reference {
+    pub image: Image,
+    /// How the reference was made (part of every run's key).
+    pub key: serde_json::Value,
+}
+
+fn paths(config: &Config, scene: &PreparedScene) -> (PathBuf, PathBuf, PathBuf) {
+    let dir = config.output.join("reference");
+    let name = &scene.entry.name;
+    (dir.join(format!("{name}.exr")), dir.join(format!("{name}.json")), dir.join(format!("{name}.png")))
+}
+
+/// The image file given for `scene`, if any.
+fn given(config: &Config, scene: &PreparedScene) -> Option<PathBuf> {
+    scene.entry.reference.clone().or_else(|| config.reference.image.clone())
+}
+
+fn key(config: &Config, scene: &PreparedScene) -> serde_json::Value {
+    let film = &scene.scene.film;
+    if let Some(image) = given(config, scene) {
+        let modified = std::fs::metadata(&image)
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+            .map(|d| d.as_secs());
+        return serde_json::json!({ "image": image.display().to_string(), "modified": modified });
+    }
+    let r = &config.reference;
+    serde_json::json!({
+        "method": r.method.as_deref().unwrap_or("bdpt"),
+        "args": r.args,
+        "spp": if r.seconds.is_none() { Some(r.spp.unwrap_or(DEFAULT_SPP)) } else { None },
+        "seconds": r.seconds,
+        "seed": r.seed.unwrap_or(DEFAULT_SEED),
+        "scene_file": scene.entry.file.as_ref().map(|p| p.display().to_string()),
+        "resolution": [film.width, film.height],
+        "maxdepth": scene.scene.defaults.max_depth,
+    })
+}
+
+fn read(path: &std::path::Path) -> Result<Image> {
+    read_image(path, ColorEncoding::Linear).with_context(|| format!("cannot read the reference {}", path.display()))
+}
+
+/// The reference already at hand: a given image or a cached render that still matches.
+pub fn cached(config: &Config, scene: &PreparedScene) -> Result<Option<Reference>> {
+    let key = key(config, scene);
+    if let Some(path) = given(config, scene) {
+        let image = read(&path)?;
+        let film = &scene.scene.film;
+        if (image.width, image.height) != (film.width as usize, film.height as usize) {
+            bail!(
+                "scene '{}': the reference {} is {}x{} but the scene renders at {}x{} (set `resolution`)",
+                scene.entry.name,
+                path.display(),
+                image.width,
+                image.height,
+                film.width,
+                film.height
+            );
+        }
+        return Ok(Some(Reference { image, key }));
+    }
+    let (exr, json, _) = paths(config, scene);
+    let same = std::fs::read_to_string(&json)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|k| k == key);
+    if same && let Ok(image) = read(&exr) {
+        return Ok(Some(Reference { image, key }));
+    }
+    Ok(None)
+}
+
+/// The reference of `scene`, rendering (and caching) it when needed.
+pub fn obtain(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Reference> {
+    let reference = match cached(config, scene)? {
+        Some(r) => r,
+        None => render(config, scene, quiet)?,
+    };
+    let (_, _, png) = paths(config, scene);
+    std::fs::create_dir_all(png.parent().expect("reference paths have a folder"))?;
+    write_image(&png, &reference.image, &WriteOptions::default())?;
+    Ok(reference)
+}
+
+fn render(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Reference> {
+    let r = &config.reference;
+    let method = r.method.as_deref().unwrap_or("bdpt");
+    let flags = parse_flags("[reference]", method, &r.args, false)?;
+    let integrator = crate::render::build_integrator(&flags, &scene.scene, method).context("[reference]")?;
+    let budget = match r.seconds {
+        Some(t) => Budget::Time(Duration::from_secs_f64(t)),
+        None => Budget::Samples(r.spp.unwrap_or(DEFAULT_SPP)),
+    };
+    let film = &scene.scene.film;
+    let pixels = u64::from(film.width) * u64::from(film.height);
+    let bar = if quiet || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        let len = match budget {
+            Budget::Samples(spp) => pixels * u64::from(spp),
+            Budget::Time(d) => d.as_millis() as u64,
+        };
+        let bar = ProgressBar::new(len);
+        let style = ProgressStyle::with_template("{msg} {elapsed_precise} [{wide_bar}] {percent}% (eta {eta})")
+            .expect("valid template");
+        bar.set_style(style.progress_chars("=> "));
+        bar.set_message(format!("reference for {}", scene.entry.name));
+        bar
+    };
+    let what = match budget {
+        Budget::Samples(spp) => format!("{spp} spp"),
+        Budget::Time(d) => format!("{} s", d.as_secs_f64()),
+    };
+    eprintln!("scene '{}': rendering the reference with {method}, {what}", scene.entry.name);
+    let start = Instant::now();
+    let on_progress = |n: u64| match budget {
+        Budget::Samples(_) => bar.inc(n),
+        Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
+    };
+    let control = RenderControl::new(&CANCEL, &on_progress);
+    let settings = RenderSettings { budget, seed: r.seed.unwrap_or(DEFAULT_SEED), threads: config.threads };
+    let out = integrator.try_render(&scene.scene, &settings, &control).map_err(anyhow::Error::msg);
+    bar.finish_and_clear();
+    let out = out.with_context(|| format!("scene '{}': reference", scene.entry.name))?;
+    if out.stats.cancelled {
+        bail!("interrupted while rendering the reference of '{}' (nothing cached)", scene.entry.name);
+    }
+    eprintln!("scene '{}': reference rendered in {:.1} s", scene.entry.name, out.stats.seconds);
+    let (exr, json, _) = paths(config, scene);
+    std::fs::create_dir_all(exr.parent().expect("reference paths have a folder"))?;
+    write_image(&exr, &out.image, &WriteOptions::default())?;
+    let key = key(config, scene);
+    std::fs::write(&json, serde_json::to_string_pretty(&key).expect("keys serialise"))
+        .with_context(|| format!("cannot write {}", json.display()))?;
+    Ok(Reference { image: out.image, key })
+}
+
+/// The reference image of `scene` relative to the output folder (for the report).
+pub fn png_name(scene: &str) -> String {
+    format!("reference/{scene}.png")
+}

@@ -1,0 +1,368 @@
+//! The runs of an experiment: scenes loaded once, methods parsed from `tempera render` flags,
+//! and one render per (scene, method, seed) whose images at every recorded time are compared
+//! with the reference.
+
+use super::config::{Config, Method, SceneEntry};
+use super::reference::Reference;
+use crate::render::{CANCEL, RenderArgs};
+use anyhow::{Context, Result, bail};
+use clap::Parser;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+use tempera::integrator::{Budget, Integrator, RenderControl, RenderOutput, RenderSettings};
+use tempera::mcmc::DepthStats;
+use tempera_image::metrics;
+use tempera_image::{WriteOptions, write_image};
+
+/// `tempera render` flags of a method or the reference, parsed as the command line would.
+#[derive(Parser, Debug)]
+#[command(no_binary_name = true, name = "method flags")]
+struct Flags {
+    #[command(flatten)]
+    render: RenderArgs,
+}
+
+/// A method ready to render.
+pub struct PreparedMethod {
+    pub method: Method,
+    pub integrator: Box<dyn Integrator>,
+}
+
+/// A scene loaded once for all its runs.
+pub struct PreparedScene {
+    pub entry: SceneEntry,
+    pub scene: tempera::scene::Scene,
+    pub methods: Vec<PreparedMethod>,
+}
+
+/// Parses `args` as `tempera render` flags for integrator `integrator`, refusing the flags
+/// the experiment sets itself.
+pub fn parse_flags(what: &str, integrator: &str, args: &[String], allow_spp: bool) -> Result<RenderArgs> {
+    let mut all = vec!["--integrator".to_owned(), integrator.to_owned()];
+    all.extend(args.iter().cloned());
+    let flags =
+        Flags::try_parse_from(&all).map_err(|e| anyhow::anyhow!("{what}: {}", e.render().to_string().trim()))?;
+    let r = flags.render;
+    let owned = [
+        (r.scene.is_some(), "a scene file (give it in [[scene]])"),
+        (r.time.is_some(), "--time (the experiment's [budget] sets it)"),
+        (r.mpp.is_some() || (r.spp.is_some() && !allow_spp), "--spp/--mpp (runs are equal-time)"),
+        (r.seed != 0, "--seed (the experiment's [budget] seeds set it)"),
+        (!r.output.is_empty() || r.stats.is_some(), "-o/--stats (the experiment writes its own files)"),
+        (r.resolution.is_some() || r.maxdepth.is_some(), "--resolution/--maxdepth (set them per [[scene]])"),
+        (r.threads != 0, "--threads (set `threads` at the top of the file)"),
+        (r.strategy_images.is_some(), "--strategy-images"),
+    ];
+    if let Some((_, flag)) = owned.iter().find(|(set, _)| *set) {
+        bail!("{what}: the method's args may not set {flag}");
+    }
+    Ok(r)
+}
+
+/// Loads every scene (skipping optional ones whose file is missing) and builds every method
+/// for it, so that a mistake in any of them stops the experiment before the first render.
+pub fn prepare_scenes(config: &Config) -> Result<Vec<PreparedScene>> {
+    let mut scenes = Vec::new();
+    for entry in &config.scenes {
+        if let Some(file) = &entry.file
+            && !file.exists()
+        {
+            if entry.optional {
+                eprintln!("scene '{}': {} does not exist; skipped (optional)", entry.name, file.display());
+                continue;
+            }
+            bail!("scene '{}': {} does not exist", entry.name, file.display());
+        }
+        let loaded =
+            crate::scene::load(entry.file.as_deref(), false).with_context(|| format!("scene '{}'", entry.name))?;
+        if !loaded.warnings.is_empty() {
+            eprintln!("scene '{}': {} loader warnings (see `tempera info`)", entry.name, loaded.warnings.len());
+        }
+        let mut scene = loaded.scene;
+        if let Some(r) = &entry.resolution {
+            let (w, h) = crate::render::parse_resolution(r).map_err(anyhow::Error::msg)?;
+            scene.set_resolution(w, h);
+        }
+        if let Some(d) = entry.maxdepth {
+            scene.defaults.max_depth = d;
+        }
+        let mut methods = Vec::new();
+        for method in &config.methods {
+            let what = format!("method '{}'", method.name);
+            let flags = parse_flags(&what, &method.integrator, &method.args, false)?;
+            let integrator = crate::render::build_integrator(&flags, &scene, &method.integrator).context(what)?;
+            methods.push(PreparedMethod { method: method.clone(), integrator });
+        }
+        scenes.push(PreparedScene { entry: entry.clone(), scene, methods });
+    }
+    Ok(scenes)
+}
+
+/// One line of results: a run's image at one time, compared with the reference.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Row {
+    pub scene: String,
+    pub method: String,
+    pub seed: u64,
+    /// The recorded time (a budget or a snapshot), seconds.
+    pub time: f64,
+    /// When the image was actually taken, seconds after the render started.
+    pub seconds: f64,
+    pub mse: f64,
+    pub rmse: f64,
+    pub relmse: f64,
+    pub smape: f64,
+    pub flip: f64,
+    pub mean_ratio: f64,
+    /// Samples (path tracing, BDPT) or main-chain mutations (MCMC) per pixel.
+    pub samples_per_pixel: f64,
+    /// Markov-chain acceptance over all depths (MCMC only).
+    pub acceptance: Option<f64>,
+    /// Neighbour-swap acceptance over all depths (tempered MMLT only).
+    pub neighbor_acceptance: Option<f64>,
+    /// The image files of this row (relative to the output folder), when it was a budget.
+    pub image: Option<String>,
+    /// The render statistics, as `tempera render --stats` writes them.
+    pub stats: serde_json::Value,
+}
+
+/// A finished run: what it was and its rows.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct Record {
+    pub key: serde_json::Value,
+    pub rows: Vec<Row>,
+}
+
+fn acceptance(chains: &[DepthStats]) -> Option<f64> {
+    let (mut accepted, mut proposed) = (0, 0);
+    for d in chains.iter().filter(|d| !d.all_depths || chains.len() == 1) {
+        accepted += d.large_steps_accepted + d.small_steps_accepted;
+        proposed += d.large_steps_proposed + d.small_steps_proposed;
+    }
+    (proposed > 0).then(|| accepted as f64 / proposed as f64)
+}
+
+fn neighbor_acceptance(chains: &[DepthStats]) -> Option<f64> {
+    let (mut accepted, mut attempts) = (0, 0);
+    for s in chains.iter().filter_map(|d| d.swaps.as_ref()) {
+        let k = s.replicas;
+        for i in 0..k.saturating_sub(1) {
+            attempts += s.attempts[i * k + i + 1];
+            accepted += s.accepted[i * k + i + 1];
+        }
+    }
+    (attempts > 0).then(|| accepted as f64 / attempts as f64)
+}
+
+/// A time as it appears in file names: `10`, `0.5`.
+pub fn time_label(t: f64) -> String {
+    format!("{t}")
+}
+
+/// One (scene, method, seed) of an experiment.
+pub struct Job<'a> {
+    pub config: &'a Config,
+    pub scene: &'a PreparedScene,
+    pub method: &'a PreparedMethod,
+    pub seed: u64,
+    pub reference: &'a Reference,
+}
+
+impl Job<'_> {
+    fn record_path(&self) -> PathBuf {
+        self.config
+            .output
+            .join("runs")
+            .join(&self.scene.entry.name)
+            .join(&self.method.method.name)
+            .join(format!("seed-{}.json", self.seed))
+    }
+
+    /// Everything that decides what the run computes: a record with another key is stale.
+    fn key(&self) -> serde_json::Value {
+        let film = &self.scene.scene.film;
+        serde_json::json!({
+            "integrator": self.method.method.integrator,
+            "args": self.method.method.args,
+            "scene_file": self.scene.entry.file.as_ref().map(|p| p.display().to_string()),
+            "resolution": [film.width, film.height],
+            "maxdepth": self.scene.scene.defaults.max_depth,
+            "times": self.config.times(),
+            "budgets": self.config.budget.seconds,
+            "seed": self.seed,
+            "reference": self.reference.key,
+        })
+    }
+
+    /// The run's record if it exists and describes this run.
+    pub fn existing(&self) -> Option<Record> {
+        let text = std::fs::read_to_string(self.record_path()).ok()?;
+        let record: Record = serde_json::from_str(&text).ok()?;
+        (record.key == self.key()).then_some(record)
+    }
+
+    /// The existing record, or a fresh render (`None` when Ctrl-C stopped it).
+    pub fn existing_or_run(&self, index: usize, total: usize, quiet: bool) -> Result<Option<Record>> {
+        let label =
+            format!("[{index}/{total}] {} · {} · seed {}", self.scene.entry.name, self.method.method.name, self.seed);
+        if let Some(record) = self.existing() {
+            eprintln!("{label}: finished earlier");
+            return Ok(Some(record));
+        }
+        let record = self.render(&label, quiet)?;
+        if let Some(record) = &record {
+            let path = self.record_path();
+            std::fs::create_dir_all(path.parent().expect("record paths have a folder"))?;
+            let text = serde_json::to_string_pretty(record).expect("records serialise");
+            std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+            if let Some(last) = record.rows.last() {
+                eprintln!(
+                    "{label}: relMSE {:.4e}, FLIP {:.4}, {:.1} samples or mutations/pixel in {:.1} s",
+                    last.relmse, last.flip, last.samples_per_pixel, last.seconds
+                );
+            }
+        }
+        Ok(record)
+    }
+
+    fn progress(&self, label: &str, longest: f64, quiet: bool) -> ProgressBar {
+        if quiet || !std::io::stderr().is_terminal() {
+            return ProgressBar::hidden();
+        }
+        let bar = ProgressBar::new((longest * 1000.0) as u64);
+        let style =
+            ProgressStyle::with_template("{msg} {elapsed_precise} [{wide_bar}] {percent}%").expect("valid template");
+        bar.set_style(style.progress_chars("=> "));
+        bar.set_message(label.to_owned());
+        bar
+    }
+
+    fn render(&self, label: &str, quiet: bool) -> Result<Option<Record>> {
+        let times = self.config.times();
+        let longest = *times.last().expect("a budget exists");
+        let snapshot_times: Vec<Duration> =
+            times[..times.len() - 1].iter().map(|&t| Duration::from_secs_f64(t)).collect();
+        let taken: Mutex<Vec<(usize, RenderOutput)>> = Mutex::new(Vec::new());
+        let on_snapshot = |i: usize, out: &RenderOutput| {
+            let copy = RenderOutput {
+                image: out.image.clone(),
+                stats: out.stats.clone(),
+                layers: Vec::new(),
+                chains: out.chains.clone(),
+            };
+            taken.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push((i, copy));
+        };
+        let bar = self.progress(label, longest, quiet);
+        let start = Instant::now();
+        let on_progress = |_: u64| bar.set_position(start.elapsed().as_millis() as u64);
+        let control = RenderControl::new(&CANCEL, &on_progress).with_snapshots(&snapshot_times, &on_snapshot);
+        let settings = RenderSettings {
+            budget: Budget::Time(Duration::from_secs_f64(longest)),
+            seed: self.seed,
+            threads: self.config.threads,
+        };
+        let integrator = self.method.integrator.as_ref();
+        let out = integrator.try_render(&self.scene.scene, &settings, &control).map_err(anyhow::Error::msg);
+        bar.finish_and_clear();
+        let out = out.with_context(|| label.to_owned())?;
+        if out.stats.cancelled {
+            eprintln!("{label}: interrupted; not recorded");
+            return Ok(None);
+        }
+        let mut taken = taken.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+        taken.push((times.len() - 1, out));
+        let mut rows = Vec::new();
+        for (i, output) in &taken {
+            rows.push(self.row(times[*i], output, integrator.name())?);
+        }
+        Ok(Some(Record { key: self.key(), rows }))
+    }
+
+    fn row(&self, time: f64, out: &RenderOutput, integrator: &str) -> Result<Row> {
+        let c = metrics::compare(&out.image, &self.reference.image).map_err(anyhow::Error::msg)?;
+        let pixels = f64::from(self.scene.scene.film.width) * f64::from(self.scene.scene.film.height);
+        let image = if self.config.budget.seconds.contains(&time) { Some(self.write_images(time, out)?) } else { None };
+        Ok(Row {
+            scene: self.scene.entry.name.clone(),
+            method: self.method.method.name.clone(),
+            seed: self.seed,
+            time,
+            seconds: out.stats.seconds,
+            mse: c.mse,
+            rmse: c.rmse,
+            relmse: c.relmse,
+            smape: c.smape,
+            flip: c.flip,
+            mean_ratio: c.mean_ratio,
+            samples_per_pixel: out.stats.pixel_samples as f64 / pixels.max(1.0),
+            acceptance: acceptance(&out.chains),
+            neighbor_acceptance: neighbor_acceptance(&out.chains),
+            image,
+            stats: crate::stats::to_json(integrator, out),
+        })
+    }
+
+    /// Writes the image (EXR and PNG) and its relMSE and FLIP maps; returns the stem of the
+    /// files, relative to the output folder.
+    fn write_images(&self, time: f64, out: &RenderOutput) -> Result<String> {
+        let stem = image_stem(&self.scene.entry.name, &self.method.method.name, self.seed, time);
+        let base = self.config.output.join(&stem);
+        std::fs::create_dir_all(base.parent().expect("image paths have a folder"))?;
+        let options = WriteOptions::default();
+        let with = |suffix: &str| PathBuf::from(format!("{}{suffix}", base.display()));
+        write_image(&with(".exr"), &out.image, &options)?;
+        write_image(&with(".png"), &out.image, &options)?;
+        let reference = &self.reference.image;
+        let relmse = metrics::error_map(&out.image, reference).map_err(anyhow::Error::msg)?;
+        write_image(&with("-relmse.png"), &relmse, &options)?;
+        let flip = metrics::flip_error_map(&out.image, reference).map_err(anyhow::Error::msg)?;
+        write_image(&with("-flip.png"), &flip, &options)?;
+        Ok(stem)
+    }
+}
+
+/// Where the images of a run at time `time` go, relative to the output folder, without suffix.
+pub fn image_stem(scene: &str, method: &str, seed: u64, time: f64) -> String {
+    format!("images/{scene}/{method}/seed-{seed}-{}s", time_label(time))
+}
+
+fn csv_field(v: Option<f64>) -> String {
+    v.map_or_else(String::new, |v| format!("{v}"))
+}
+
+/// `results.csv` (one row per run and time, no statistics) and `results.json` (rows with the
+/// statistics).
+pub fn write_results(config: &Config, rows: &[&Row]) -> Result<()> {
+    let mut csv = String::from(
+        "scene,method,seed,time,seconds,mse,rmse,relmse,smape,flip,mean_ratio,samples_per_pixel,acceptance,neighbor_acceptance\n",
+    );
+    for r in rows {
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            r.scene,
+            r.method,
+            r.seed,
+            r.time,
+            r.seconds,
+            r.mse,
+            r.rmse,
+            r.relmse,
+            r.smape,
+            r.flip,
+            r.mean_ratio,
+            r.samples_per_pixel,
+            csv_field(r.acceptance),
+            csv_field(r.neighbor_acceptance)
+        ));
+    }
+    let write = |name: &str, text: &str| {
+        let path: &Path = &config.output.join(name);
+        std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+    };
+    write("results.csv", &csv)?;
+    write("results.json", &serde_json::to_string_pretty(rows).expect("rows serialise"))
+}
