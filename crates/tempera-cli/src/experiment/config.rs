@@ -206,7 +206,7 @@ seeds = [1, 2]
     #[test]
     fn the_documented_shape_loads() {
         let c = parse(BASE).unwrap();
-        assert!(c.output.ends_with("out") && c.output.is_absolute() || c.output.components().count() > 1);
+        assert!(c.output.ends_with("out") && c.output.components().count() > 1, "relative to the file");
         assert_eq!(c.times(), vec![0.5, 1.0, 2.0], "snapshots past the longest budget are dropped");
         assert_eq!(c.budget.seeds, vec![1, 2]);
         assert_eq!(c.reference.spp, Some(64));

@@ -1,0 +1,193 @@
+//! `tempera experiment` as a user runs it: a tiny experiment writes its results, images and
+//! report, a second invocation reuses every finished run, mistakes in the file are clear
+//! errors, and the report loads in a headless browser (when Chromium is installed).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn tempera() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tempera"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tempera-experiment-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+const TINY: &str = r#"
+output = "out"
+[reference]
+method = "bdpt"
+spp = 16
+[[scene]]
+name = "default"
+resolution = "24x24"
+maxdepth = 4
+[[scene]]
+name = "absent"
+file = "no/such/scene.pbrt"
+optional = true
+[[method]]
+name = "bdpt"
+integrator = "bdpt"
+[[method]]
+name = "mmlt"
+integrator = "mmlt"
+args = ["--bootstrap", "2000", "--chains", "8"]
+[budget]
+seconds = [0.4]
+snapshots = [0.2]
+seeds = [1, 2]
+"#;
+
+fn run(dir: &Path, config: &str) -> Output {
+    std::fs::write(dir.join("tiny.toml"), config).unwrap();
+    tempera().current_dir(dir).args(["experiment", "tiny.toml", "-q"]).output().unwrap()
+}
+
+#[test]
+fn experiment_writes_results_images_and_report_and_resumes() {
+    let dir = scratch("resume");
+    let out = run(&dir, TINY);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let log = stderr(&out);
+    assert!(log.contains("scene 'absent'") && log.contains("skipped (optional)"), "{log}");
+    assert!(log.contains("rendering the reference") && log.contains("[4/4]"), "{log}");
+    let out_dir = dir.join("out");
+    let csv = std::fs::read_to_string(out_dir.join("results.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    for key in ["scene", "method", "seed", "time", "relmse", "flip", "smape", "mean_ratio", "acceptance"] {
+        assert!(header.split(',').any(|h| h == key), "{key} missing from {header}");
+    }
+    // 2 methods × 2 seeds × (1 snapshot + 1 budget).
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 8, "{csv}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("results.json")).unwrap()).unwrap();
+    let rows = json.as_array().unwrap();
+    assert_eq!(rows.len(), 8);
+    for r in rows {
+        let relmse = r["relmse"].as_f64().unwrap();
+        assert!(relmse.is_finite() && relmse > 0.0, "{r}");
+        assert!((r["mean_ratio"].as_f64().unwrap() - 1.0).abs() < 0.5, "{r}");
+        assert!(r["seconds"].as_f64().unwrap() >= r["time"].as_f64().unwrap() * 0.99, "taken at or after its time");
+        if r["method"] == "mmlt" {
+            assert!(r["stats"]["depths"].as_array().is_some_and(|d| !d.is_empty()), "MCMC statistics: {r}");
+            assert!(r["acceptance"].as_f64().is_some());
+        }
+    }
+    for file in [
+        "report.html",
+        "reference/default.exr",
+        "reference/default.png",
+        "images/default/mmlt/seed-2-0.4s.exr",
+        "images/default/mmlt/seed-2-0.4s.png",
+        "images/default/mmlt/seed-2-0.4s-relmse.png",
+        "images/default/mmlt/seed-2-0.4s-flip.png",
+        "spread/default/mmlt-variance.png",
+    ] {
+        assert!(out_dir.join(file).exists(), "{file} missing");
+    }
+    let html = std::fs::read_to_string(out_dir.join("report.html")).unwrap();
+    assert!(html.contains("Seed spread") && html.contains("<svg") && html.contains("mmlt"));
+
+    // A second invocation renders nothing: the reference and every run are reused.
+    let record = out_dir.join("runs/default/mmlt/seed-1.json");
+    let before = std::fs::read_to_string(&record).unwrap();
+    let again = run(&dir, TINY);
+    assert!(again.status.success(), "{}", stderr(&again));
+    let log = stderr(&again);
+    assert_eq!(log.matches("finished earlier").count(), 4, "{log}");
+    assert!(!log.contains("rendering the reference"), "{log}");
+    assert_eq!(std::fs::read_to_string(&record).unwrap(), before);
+
+    // Adding a seed renders only the new runs.
+    let more = run(&dir, &TINY.replace("seeds = [1, 2]", "seeds = [1, 2, 3]"));
+    assert!(more.status.success(), "{}", stderr(&more));
+    let log = stderr(&more);
+    assert_eq!(log.matches("finished earlier").count(), 4, "{log}");
+    assert!(log.contains("[6/6] default · mmlt · seed 3: relMSE"), "{log}");
+    let csv = std::fs::read_to_string(out_dir.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 12);
+}
+
+#[test]
+fn mistakes_in_the_experiment_file_are_clear_errors() {
+    let dir = scratch("errors");
+    for (change, expected) in [
+        (("args = [\"--bootstrap\"", "args = [\"--time\", \"3\", \"--bootstrap\""), "may not set --time"),
+        (("integrator = \"mmlt\"", "integrator = \"nope\""), "invalid value 'nope'"),
+        (("optional = true", "optional = false"), "no/such/scene.pbrt does not exist"),
+        (("seconds = [0.4]", "seconds = []"), "at least one time"),
+        (("spp = 16", "spp = 16\nimage = \"r.exr\""), "serves a single scene"),
+        (("[budget]", "[budget]\nsnapshot = [1]"), "unknown field `snapshot`"),
+    ] {
+        let out = run(&dir, &TINY.replace(change.0, change.1));
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{change:?} should fail");
+        assert!(err.contains(expected), "{change:?}: expected '{expected}' in {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+fn chromium() -> Option<&'static str> {
+    ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|c| Command::new(c).arg("--version").output().is_ok_and(|o| o.status.success()))
+}
+
+#[test]
+fn report_loads_its_images_and_plots_in_headless_chromium() {
+    let Some(browser) = chromium() else {
+        eprintln!("skipped: Chromium is not installed (Debian: apt-get install chromium)");
+        return;
+    };
+    let dir = scratch("chromium");
+    let out = run(&dir, TINY);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report = dir.join("out/report.html");
+    let url = format!("file://{}", report.canonicalize().unwrap().display());
+    let flags = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-logging=stderr", "--v=0"];
+    let shot = dir.join("report.png");
+    let screenshot = Command::new(browser)
+        .args(flags)
+        .args(["--window-size=1280,2000", "--virtual-time-budget=5000"])
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(&url)
+        .output()
+        .unwrap();
+    assert!(screenshot.status.success(), "{}", stderr(&screenshot));
+    let dom = Command::new(browser)
+        .args(flags)
+        .args(["--virtual-time-budget=5000", "--dump-dom"])
+        .arg(&url)
+        .output()
+        .unwrap();
+    assert!(dom.status.success(), "{}", stderr(&dom));
+    // Console messages (errors included) appear on standard error as `CONSOLE` lines.
+    for log in [stderr(&screenshot), stderr(&dom)] {
+        let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
+        assert!(console.is_empty(), "console output: {console:?}");
+    }
+    // The page's own check: every image decoded and every plot is an SVG.
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    let body = dom.split("<body").nth(1).and_then(|b| b.split('>').next()).unwrap_or_default();
+    assert!(body.contains("data-status=\"ok\""), "report check failed: <body{body}>");
+    assert!(body.contains("data-plots=\"2\""), "{body}");
+    let images: usize =
+        body.split("data-images=\"").nth(1).and_then(|v| v.split('"').next()).and_then(|v| v.parse().ok()).unwrap_or(0);
+    assert!(images >= 10, "{body}");
+    // The screenshot shows a page, not a blank window.
+    let png = tempera_image::read_image(&shot, tempera_image::ColorEncoding::Srgb).unwrap();
+    assert!(png.width >= 1000 && png.height >= 1000);
+    let distinct: std::collections::HashSet<[u32; 3]> =
+        png.pixels.iter().map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]).collect();
+    assert!(distinct.len() > 100, "a blank screenshot ({} colours)", distinct.len());
+}
