@@ -191,3 +191,35 @@ fn report_loads_its_images_and_plots_in_headless_chromium() {
         png.pixels.iter().map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]).collect();
     assert!(distinct.len() > 100, "a blank screenshot ({} colours)", distinct.len());
 }
+
+#[cfg(unix)]
+#[test]
+fn an_interrupted_experiment_keeps_its_finished_runs() {
+    let dir = scratch("interrupt");
+    let config = TINY.replace("seconds = [0.4]", "seconds = [1.5]").replace("seeds = [1, 2]", "seeds = [1, 2, 3]");
+    std::fs::write(dir.join("tiny.toml"), config).unwrap();
+    let mut child = tempera()
+        .current_dir(&dir)
+        .args(["experiment", "tiny.toml", "-q"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait for the first run's record, then press Ctrl-C during the second run.
+    let first = dir.join("out/runs/default/bdpt/seed-1.json");
+    let start = std::time::Instant::now();
+    while !first.exists() && start.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    assert!(first.exists(), "the first run never finished");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    let out = child.wait_with_output().unwrap();
+    let log = stderr(&out);
+    assert!(out.status.success(), "{log}");
+    assert!(log.contains("interrupted"), "{log}");
+    assert!(!dir.join("out/runs/default/bdpt/seed-2.json").exists(), "the interrupted run is not recorded");
+    let csv = std::fs::read_to_string(dir.join("out/results.csv")).unwrap();
+    assert_eq!(csv.lines().filter(|l| l.starts_with("default,bdpt,1,")).count(), 2, "{csv}");
+    assert!(dir.join("out/report.html").exists());
+}
