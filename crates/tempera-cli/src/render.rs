@@ -92,6 +92,10 @@ pub struct RenderArgs {
     /// densities.
     #[arg(long, default_value = "roughened", value_parser = ["roughened", "original"])]
     pub tempered_mis: String,
+    /// Tempered MMLT: every replica contributes to the image, weighted by the balance heuristic
+    /// over the replicas' normalised targets (default: replica 0 alone).
+    #[arg(long)]
+    pub reuse_replicas: bool,
     /// Treat scene-loading warnings (unknown directives, unused parameters, approximations) as
     /// errors.
     #[arg(long)]
@@ -239,6 +243,7 @@ pub fn build_integrator(args: &RenderArgs, scene: &Scene, name: &str) -> Result<
         keep_mis: args.tempered_mis == "original",
         burn_in: args.burn_in,
         swap_target: args.swap_target.map(f64::from),
+        reuse_replicas: args.reuse_replicas,
     };
     integrator::create(name, &options).with_context(|| format!("unknown integrator '{name}'"))
 }

@@ -55,6 +55,11 @@ fn depth_json(d: &DepthStats) -> Value {
         let ladder: Vec<f64> = d.ladder.iter().map(|a| a.to_string().parse().unwrap_or(f64::from(*a))).collect();
         v["ladder"] = json!(ladder);
     }
+    if !d.replica_b_ratios.is_empty() {
+        let ratios: Vec<f64> =
+            d.replica_b_ratios.iter().map(|a| a.to_string().parse().unwrap_or(f64::from(*a))).collect();
+        v["replica_b_ratios"] = json!(ratios);
+    }
     if let Some(swaps) = &d.swaps {
         v["swaps"] = swaps_json(swaps);
     }

@@ -198,7 +198,7 @@ fn an_interrupted_experiment_keeps_its_finished_runs() {
     let dir = scratch("interrupt");
     let config = TINY.replace("seconds = [0.4]", "seconds = [1.5]").replace("seeds = [1, 2]", "seeds = [1, 2, 3]");
     std::fs::write(dir.join("tiny.toml"), config).unwrap();
-    let mut child = tempera()
+    let child = tempera()
         .current_dir(&dir)
         .args(["experiment", "tiny.toml", "-q"])
         .stderr(std::process::Stdio::piped())

@@ -217,6 +217,8 @@ pub struct IntegratorOptions {
     /// (`None`: the integrator's defaults).
     pub burn_in: Option<u64>,
     pub swap_target: Option<f64>,
+    /// Tempered MMLT: every replica contributes to the image.
+    pub reuse_replicas: bool,
 }
 
 /// The integrator called `name`.
@@ -248,6 +250,7 @@ pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integra
                 roughen_mis: !options.keep_mis,
                 burn_in: options.burn_in.unwrap_or(m.burn_in),
                 swap_target: options.swap_target.unwrap_or(m.swap_target),
+                reuse_replicas: options.reuse_replicas,
                 ..m
             }))
         }

@@ -26,6 +26,9 @@ pub struct DepthStats {
     pub ladder: Vec<f32>,
     pub ladder_ensembles: u64,
     pub swaps: Option<SwapStats>,
+    /// Tempered MMLT with all-replica reuse: the normalisation ratios `b_l/b_0` of the
+    /// replicas (mean over the ensembles, like the ladder); empty otherwise.
+    pub replica_b_ratios: Vec<f32>,
 }
 
 impl DepthStats {
@@ -49,6 +52,12 @@ impl DepthStats {
             let (n, m) = (self.ladder_ensembles as f64, o.ladder_ensembles.max(1) as f64);
             for (a, b) in self.ladder.iter_mut().zip(&o.ladder) {
                 *a = ((f64::from(*a) * n + f64::from(*b) * m) / (n + m)) as f32;
+            }
+            if !o.replica_b_ratios.is_empty() {
+                self.replica_b_ratios.resize(o.replica_b_ratios.len(), 0.0);
+                for (a, b) in self.replica_b_ratios.iter_mut().zip(&o.replica_b_ratios) {
+                    *a = ((f64::from(*a) * n + f64::from(*b) * m) / (n + m)) as f32;
+                }
             }
             self.ladder_ensembles += o.ladder_ensembles.max(1);
         }

@@ -11,11 +11,12 @@
 //! beyond `a = 1` roughening changes nothing, and on scenes whose connections are mostly
 //! diffuse the acceptance stays above `α*` even at the cap.
 
+use super::reuse::{Calibration, Reuse};
 use super::{CrossValues, SwapStrategy, swap_acceptance};
 use crate::film::SplatBuffer;
 use crate::integrator::mmlt::Walker;
 use crate::math::rng::Pcg32;
-use crate::mcmc::{Chain, DepthStats, SwapStats, TemperedState, TemperedTarget};
+use crate::mcmc::{Chain, DepthStats, State, SwapStats, TemperedState, TemperedTarget};
 
 pub struct Ensemble<'a> {
     pub replicas: Vec<Chain<TemperedState>>,
@@ -27,6 +28,12 @@ pub struct Ensemble<'a> {
     pub tuning: Option<Tuning>,
     /// Storage for the cross-evaluations of one swap step, reused across sweeps.
     pub(super) cross_cache: Vec<Option<f64>>,
+    /// All-replica reuse: the calibration still to do once the ladder is frozen, then the
+    /// ratios every replica's splats are weighted with.
+    pub calibration: Option<Calibration>,
+    pub reuse: Option<Reuse>,
+    /// Rays traced outside the replicas' chains (the calibration).
+    pub extra_rays: u64,
 }
 
 /// The state of the ladder's burn-in.
@@ -183,6 +190,11 @@ impl Walker for Ensemble<'_> {
         if !self.tune(stop) {
             return 0;
         }
+        if let Some(plan) = self.calibration.take() {
+            let (reuse, rays) = Reuse::calibrate(&self.targets, &plan);
+            self.reuse = Some(reuse);
+            self.extra_rays += rays;
+        }
         if self.replicas.len() == 1 {
             return self.replicas[0].run(&self.targets[0], mutations, Some(splats), stop);
         }
@@ -192,10 +204,20 @@ impl Walker for Ensemble<'_> {
             if done % 256 == 0 && stop() {
                 break;
             }
+            let reuse = self.reuse.is_some();
             for (j, (chain, target)) in self.replicas.iter_mut().zip(&self.targets).enumerate() {
-                chain.mutate(target, if j == 0 { Some(&mut *splats) } else { None });
+                chain.mutate(target, if j == 0 && !reuse { Some(&mut *splats) } else { None });
             }
             self.swap();
+            if let Some(reuse) = &self.reuse {
+                // Every replica's current state, weighted by the balance heuristic.
+                for chain in &mut self.replicas {
+                    let scale = reuse.scale(&self.targets, chain.state_mut());
+                    if scale > 0.0 {
+                        chain.state().splat(splats, scale);
+                    }
+                }
+            }
             done += 1;
         }
         // The ensemble's time is its main chain's.
@@ -207,6 +229,8 @@ impl Walker for Ensemble<'_> {
         let mut stats = self.replicas[0].stats.clone();
         stats.ladder = self.targets.iter().map(|t| t.temper.a).collect();
         stats.ladder_ensembles = 1;
+        stats.replica_b_ratios =
+            self.reuse.as_ref().map_or_else(Vec::new, |r| r.ratios.iter().map(|&x| x as f32).collect());
         stats.swaps = (self.replicas.len() > 1).then(|| self.swaps.clone());
         stats
     }
@@ -216,6 +240,6 @@ impl Walker for Ensemble<'_> {
     }
 
     fn rays(&self) -> u64 {
-        self.replicas.iter().map(|r| r.rays).sum()
+        self.replicas.iter().map(|r| r.rays).sum::<u64>() + self.extra_rays
     }
 }

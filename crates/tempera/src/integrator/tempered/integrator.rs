@@ -3,7 +3,7 @@
 //! only strategy has no connection vertex, runs plain MMLT chains.
 
 use super::ensemble::{Ensemble, Tuning};
-use super::{EquiEnergy, Neighbor, Permutation, SwapStrategy};
+use super::{Calibration, EquiEnergy, Neighbor, Permutation, SwapStrategy};
 use crate::bidir::{Heuristic, Tempering};
 use crate::integrator::mmlt::{ChainSettings, MmltReport, StartContext, sampler_for};
 use crate::integrator::{ChainIntegrator, RenderControl, RenderOutput, RenderSettings};
@@ -56,6 +56,9 @@ pub struct TemperedIntegrator {
     pub burn_in: u64,
     /// Neighbour-swap acceptance the tuning aims at.
     pub swap_target: f64,
+    /// Every replica contributes to the image (balance heuristic over the replicas' targets)
+    /// instead of replica 0 alone.
+    pub reuse_replicas: bool,
 }
 
 impl TemperedIntegrator {
@@ -72,6 +75,7 @@ impl TemperedIntegrator {
             roughen_mis: true,
             burn_in: 500,
             swap_target: 0.234,
+            reuse_replicas: false,
         }
     }
 
@@ -130,6 +134,16 @@ impl ChainIntegrator for TemperedIntegrator {
                 rng: Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11),
                 swaps: SwapStats::new(ladder.len()),
                 cross_cache: Vec::new(),
+                calibration: (self.reuse_replicas && ladder.len() > 1).then_some(Calibration {
+                    seed,
+                    depth: k,
+                    ensemble: c,
+                    samples: (self.bootstrap / self.chains.max(1)).max(256),
+                    sigma: self.sigma,
+                    large_step_probability: self.large_step_probability,
+                }),
+                reuse: None,
+                extra_rays: 0,
                 tuning: (self.ladder.is_empty() && self.burn_in > 0 && ladder.len() > 1).then_some(Tuning {
                     sweeps: self.burn_in,
                     target: self.swap_target,

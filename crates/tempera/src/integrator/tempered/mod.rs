@@ -19,6 +19,7 @@ mod equi_energy;
 mod integrator;
 mod neighbor;
 mod permutation;
+mod reuse;
 
 #[cfg(test)]
 mod tests;
@@ -28,6 +29,7 @@ pub use equi_energy::EquiEnergy;
 pub use integrator::{Swap, TemperedIntegrator};
 pub use neighbor::Neighbor;
 pub use permutation::Permutation;
+pub use reuse::{Calibration, Reuse};
 
 use crate::math::rng::Pcg32;
 pub use crate::mcmc::SwapStats;
