@@ -67,11 +67,27 @@ fn read(path: &std::path::Path) -> Result<Image> {
 pub fn cached(config: &Config, scene: &PreparedScene) -> Result<Option<Reference>> {
     let key = key(config, scene);
     if let Some(path) = given(config, scene) {
-        let image = read(&path)?;
+        let mut image = read(&path)?;
+        // NaN or infinite pixels would make every metric NaN: they count as black, with a warning.
+        let bad = image.pixels.iter().filter(|p| !p.is_finite()).count();
+        if bad > 0 {
+            eprintln!("warning: {}: {bad} NaN or infinite pixels read as black", path.display());
+            for p in image.pixels.iter_mut().filter(|p| !p.is_finite()) {
+                *p = tempera::math::Rgb::ZERO;
+            }
+        }
         let film = &scene.scene.film;
-        if (image.width, image.height) != (film.width as usize, film.height as usize) {
+        let (w, h) = (film.width as usize, film.height as usize);
+        // A reference at an integer multiple of the scene's resolution is box-filtered down.
+        let factor = image.width / w.max(1);
+        let image = if (image.width, image.height) != (w, h) && factor > 1 && image.height == h * factor {
+            image.downsample(factor).unwrap_or(image)
+        } else {
+            image
+        };
+        if (image.width, image.height) != (w, h) {
             bail!(
-                "scene '{}': the reference {} is {}x{} but the scene renders at {}x{} (set `resolution`)",
+                "scene '{}': the reference {} is {}x{} but the scene renders at {}x{} (set `resolution`, or a size that divides the reference's)",
                 scene.entry.name,
                 path.display(),
                 image.width,

@@ -28,6 +28,33 @@ impl Image {
         self.pixels[y * self.width + x]
     }
 
+    /// The image reduced by an integer `factor` in both axes, each output pixel the mean of a
+    /// `factor × factor` block (what a box-filtered render at the lower resolution estimates);
+    /// `None` when the size is not a multiple of `factor`.
+    pub fn downsample(&self, factor: usize) -> Option<Image> {
+        if factor == 0 || !self.width.is_multiple_of(factor) || !self.height.is_multiple_of(factor) {
+            return None;
+        }
+        let (w, h) = (self.width / factor, self.height / factor);
+        let n = (factor * factor) as f64;
+        let mut pixels = Vec::with_capacity(w * h);
+        for y in 0..h {
+            for x in 0..w {
+                let mut sum = [0f64; 3];
+                for dy in 0..factor {
+                    for dx in 0..factor {
+                        let p = self.get(x * factor + dx, y * factor + dy);
+                        for c in 0..3 {
+                            sum[c] += f64::from(p[c]);
+                        }
+                    }
+                }
+                pixels.push(Rgb::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32));
+            }
+        }
+        Some(Image::new(w, h, pixels))
+    }
+
     pub fn mean(&self) -> Rgb {
         let sum = self
             .pixels
@@ -99,5 +126,23 @@ impl ImageTexture {
             + dx * dy * self.texel(xi + 1, yi + 1);
         let v = v * self.scale;
         if self.invert { (Rgb::ONE - v).max(Rgb::ZERO) } else { v }
+    }
+}
+
+#[cfg(test)]
+mod downsample_tests {
+    use super::*;
+
+    #[test]
+    fn downsampling_averages_blocks_and_refuses_other_sizes() {
+        let pixels = (0..16).map(|i| Rgb::splat(i as f32)).collect();
+        let img = Image::new(4, 4, pixels);
+        let half = img.downsample(2).unwrap();
+        assert_eq!((half.width, half.height), (2, 2));
+        // Top-left block: 0, 1, 4, 5.
+        assert_eq!(half.get(0, 0), Rgb::splat(2.5));
+        assert_eq!(half.get(1, 1), Rgb::splat(12.5));
+        assert_eq!(half.mean(), img.mean());
+        assert!(img.downsample(3).is_none() && img.downsample(0).is_none());
     }
 }
