@@ -90,12 +90,15 @@ pub struct RenderArgs {
     pub swap_target: Option<f32>,
     /// Tempered MMLT: MIS weights of tempered replicas from the roughened or the original
     /// densities.
-    #[arg(long, default_value = "roughened", value_parser = ["roughened", "original"])]
+    #[arg(long, default_value = "original", value_parser = ["roughened", "original"])]
     pub tempered_mis: String,
     /// Tempered MMLT: every replica contributes to the image, weighted by the balance heuristic
-    /// over the replicas' normalised targets (default: replica 0 alone).
-    #[arg(long)]
+    /// over the replicas' normalised targets (the default).
+    #[arg(long, overrides_with = "no_reuse_replicas")]
     pub reuse_replicas: bool,
+    /// Tempered MMLT: replica 0 alone writes the image.
+    #[arg(long, overrides_with = "reuse_replicas")]
+    pub no_reuse_replicas: bool,
     /// Treat scene-loading warnings (unknown directives, unused parameters, approximations) as
     /// errors.
     #[arg(long)]
@@ -240,10 +243,16 @@ pub fn build_integrator(args: &RenderArgs, scene: &Scene, name: &str) -> Result<
         replicas,
         swap: tempera::integrator::Swap::parse(&args.swap).unwrap_or_default(),
         ladder: args.ladder.as_ref().map_or_else(Vec::new, |l| l.0.clone()),
-        keep_mis: args.tempered_mis == "original",
+        roughen_mis: Some(args.tempered_mis == "roughened"),
         burn_in: args.burn_in,
         swap_target: args.swap_target.map(f64::from),
-        reuse_replicas: args.reuse_replicas,
+        reuse_replicas: if args.reuse_replicas {
+            Some(true)
+        } else if args.no_reuse_replicas {
+            Some(false)
+        } else {
+            None
+        },
     };
     integrator::create(name, &options).with_context(|| format!("unknown integrator '{name}'"))
 }

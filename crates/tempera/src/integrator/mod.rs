@@ -212,13 +212,13 @@ pub struct IntegratorOptions {
     pub replicas: usize,
     pub swap: Swap,
     pub ladder: Vec<f32>,
-    pub keep_mis: bool,
+    pub roughen_mis: Option<bool>,
     /// Tempered MMLT: burn-in sweeps that tune the ladder and the acceptance they aim at
     /// (`None`: the integrator's defaults).
     pub burn_in: Option<u64>,
     pub swap_target: Option<f64>,
-    /// Tempered MMLT: every replica contributes to the image.
-    pub reuse_replicas: bool,
+    /// Tempered MMLT: every replica contributes to the image (`None`: the default).
+    pub reuse_replicas: Option<bool>,
 }
 
 /// The integrator called `name`.
@@ -247,10 +247,10 @@ pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integra
                 replicas: count(options.replicas, m.replicas),
                 swap: options.swap,
                 ladder: options.ladder.clone(),
-                roughen_mis: !options.keep_mis,
+                roughen_mis: options.roughen_mis.unwrap_or(m.roughen_mis),
                 burn_in: options.burn_in.unwrap_or(m.burn_in),
                 swap_target: options.swap_target.unwrap_or(m.swap_target),
-                reuse_replicas: options.reuse_replicas,
+                reuse_replicas: options.reuse_replicas.unwrap_or(m.reuse_replicas),
                 ..m
             }))
         }

@@ -19,6 +19,10 @@ pub struct TemperedState {
     pub value: f32,
     pub evaluated: Option<Evaluated>,
     pub paths: Paths,
+    /// Values of this state under the targets of its ensemble, by replica index (NaN: not
+    /// computed yet); cleared whenever the state is evaluated afresh. Only valid while the
+    /// ensemble's ladder is fixed.
+    pub cross: Vec<f32>,
     scratch: TemperScratch,
 }
 
@@ -70,6 +74,7 @@ impl Target for TemperedTarget<'_> {
         };
         out.contribution = contribution;
         out.evaluated = Some(e);
+        out.cross.clear();
         out.value = self.value_of(out);
         invalid
     }
