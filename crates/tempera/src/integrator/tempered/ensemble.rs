@@ -1,6 +1,9 @@
 //! One ensemble of replicas of a path depth: sweeps of one mutation per replica, each followed
-//! by a swap step. Replica 0 holds the scene's BSDFs and alone splats; its mutations are the
-//! ensemble's mutations in budgets and statistics.
+//! by a swap step. Replica 0 holds the scene's BSDFs; its mutations are the ensemble's
+//! mutations in budgets and statistics. Either replica 0 alone splats (its proposals and
+//! current states with their expected weights, as an MMLT chain), or, with all-replica reuse
+//! ([`super::reuse`]), every replica's current state splats after each sweep with its
+//! balance-heuristic weight.
 //!
 //! Ladder tuning: during a burn-in of `sweeps` sweeps (splats discarded, statistics reset
 //! afterwards) the gaps `a_j − a_{j−1}` follow a Robbins–Monro recursion on their logarithm,
