@@ -93,10 +93,10 @@ pub struct RenderArgs {
     #[arg(long, default_value = "original", value_parser = ["roughened", "original"])]
     pub tempered_mis: String,
     /// Tempered MMLT: every replica contributes to the image, weighted by the balance heuristic
-    /// over the replicas' normalised targets (the default).
+    /// over the replicas' normalised targets.
     #[arg(long, overrides_with = "no_reuse_replicas")]
     pub reuse_replicas: bool,
-    /// Tempered MMLT: replica 0 alone writes the image.
+    /// Tempered MMLT: replica 0 alone writes the image (the default).
     #[arg(long, overrides_with = "reuse_replicas")]
     pub no_reuse_replicas: bool,
     /// Treat scene-loading warnings (unknown directives, unused parameters, approximations) as
