@@ -75,6 +75,22 @@ pub(super) trait Walker: Send {
     /// Sum, sum of squares and count of the main chain's large-step proposal values.
     fn large(&self) -> (f64, f64, u64);
     fn rays(&self) -> u64;
+    /// Prepares the walkers of one group together, before the first round (tempered MMLT
+    /// tunes one ladder per depth and calibrates the replicas' normalisations here); returns
+    /// the rays it traced.
+    fn prepare_group(_walkers: &mut [Self], _group: &GroupContext, _stop: &(dyn Fn() -> bool + Sync)) -> u64
+    where
+        Self: Sized,
+    {
+        0
+    }
+}
+
+/// What [`Walker::prepare_group`] knows of its group.
+pub(super) struct GroupContext<'a> {
+    pub k: usize,
+    pub seed: u64,
+    pub settings: &'a ChainSettings,
 }
 
 /// Where a walker starts: chain `c` of group `k`, with the group's bootstrap values and the
@@ -297,8 +313,16 @@ impl ChainSettings {
                 start_walker(StartContext { k, c, seed, rng, starts: &starts[k], bootstrap: &boots[k].values })
             })
             .collect();
-        let splats = ThreadSplats::new(rayon::current_num_threads().max(1), depths, w, h);
         let stop = || control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d);
+        // Walkers of a group are contiguous in the plan.
+        let mut first = 0;
+        while first < chains.len() {
+            let k = plan[first].0;
+            let end = first + plan[first..].iter().take_while(|p| p.0 == k).count();
+            total_rays += W::prepare_group(&mut chains[first..end], &GroupContext { k, seed, settings: self }, &stop);
+            first = end;
+        }
+        let splats = ThreadSplats::new(rayon::current_num_threads().max(1), depths, w, h);
         let run_round = |chains: &mut [W], quota: &(dyn Fn(usize) -> u64 + Sync)| {
             chains.par_iter_mut().enumerate().for_each(|(i, chain)| {
                 let (k, ..) = plan[i];

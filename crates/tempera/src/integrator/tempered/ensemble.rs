@@ -5,21 +5,24 @@
 //! ([`super::reuse`]), every replica's current state splats after each sweep with its
 //! balance-heuristic weight.
 //!
-//! Ladder tuning: during a burn-in of `sweeps` sweeps (splats discarded, statistics reset
-//! afterwards) the gaps `a_j − a_{j−1}` follow a Robbins–Monro recursion on their logarithm,
-//! `ln g_j += γ_n (α_j − α*)` with `γ_n = (1 + n/10)^−0.6`, where `α_j` is the acceptance
-//! probability of exchanging replicas `j − 1` and `j` (whatever the swap strategy) and `α*`
-//! the target (0.234). Wider gaps lower the acceptance, so the recursion settles where the
+//! Ladder tuning, one shared ladder per depth: during a burn-in of `sweeps` sweeps, in which
+//! all the depth's ensembles sweep in lockstep (splats discarded, statistics reset afterwards),
+//! the gaps `a_j − a_{j−1}` follow a Robbins–Monro recursion on their logarithm,
+//! `ln g_j += γ_n (ᾱ_j − α*)` with `γ_n = (1 + n/10)^−0.6`, where `ᾱ_j` is the probability of
+//! exchanging replicas `j − 1` and `j` (whatever the swap strategy) averaged over the
+//! ensembles and `α*` the target (0.234). A shared ladder lets one calibration from the
+//! depth's bootstrap serve all-replica reuse, and averages out the noise of single ensembles. Wider gaps lower the acceptance, so the recursion settles where the
 //! neighbour acceptance averages `α*`; the ladder is then frozen. Gaps are capped at `1/(K−1)`:
 //! beyond `a = 1` roughening changes nothing, and on scenes whose connections are mostly
 //! diffuse the acceptance stays above `α*` even at the cap.
 
-use super::reuse::{Calibration, Reuse};
+use super::reuse::Reuse;
 use super::{CrossValues, SwapStrategy, swap_acceptance};
 use crate::film::SplatBuffer;
-use crate::integrator::mmlt::Walker;
+use crate::integrator::mmlt::{GroupContext, Walker};
 use crate::math::rng::Pcg32;
 use crate::mcmc::{Chain, DepthStats, State, SwapStats, TemperedState, TemperedTarget};
+use rayon::prelude::*;
 
 pub struct Ensemble<'a> {
     pub replicas: Vec<Chain<TemperedState>>,
@@ -31,12 +34,11 @@ pub struct Ensemble<'a> {
     pub tuning: Option<Tuning>,
     /// Storage for the cross-evaluations of one swap step, reused across sweeps.
     pub(super) cross_cache: Vec<Option<f64>>,
-    /// All-replica reuse: the calibration still to do once the ladder is frozen, then the
-    /// ratios every replica's splats are weighted with.
-    pub calibration: Option<Calibration>,
+    /// All-replica reuse: whether the depth's ratios are still to be calibrated (from this
+    /// many bootstrap samples) once the ladder is frozen, then the ratios every replica's
+    /// splats are weighted with.
+    pub calibration: Option<usize>,
     pub reuse: Option<Reuse>,
-    /// Rays traced outside the replicas' chains (the calibration).
-    pub extra_rays: u64,
 }
 
 /// The state of the ladder's burn-in.
@@ -134,48 +136,71 @@ impl<'a> Ensemble<'a> {
 }
 
 impl Ensemble<'_> {
-    /// Burn-in sweeps that tune the ladder; returns false when stopped early.
-    fn tune(&mut self, stop: &dyn Fn() -> bool) -> bool {
-        let Some(mut tuning) = self.tuning.take() else { return true };
+    /// One burn-in sweep: a mutation per replica (no splats); returns the probability of
+    /// accepting an exchange of each neighbouring pair of the current states.
+    fn tuning_sweep(&mut self) -> Vec<f64> {
+        for (chain, target) in self.replicas.iter_mut().zip(&self.targets) {
+            chain.mutate(target, None);
+        }
         let k = self.replicas.len();
+        let mut cross = self.cross();
+        let alphas = (1..k).map(|j| swap_acceptance(&mut cross, j - 1, j)).collect();
+        cross.ensemble.cross_cache = cross.cache;
+        alphas
+    }
+
+    /// Sets the roughening of replicas `1 …` to `ladder` and re-values their states.
+    fn set_ladder(&mut self, ladder: &[f32]) {
+        for (j, &a) in ladder.iter().enumerate() {
+            self.targets[j + 1].temper.a = a;
+            let value = self.targets[j + 1].value_of(self.replicas[j + 1].state_mut());
+            self.replicas[j + 1].state_mut().value = value;
+        }
+    }
+
+    /// The burn-in of one depth: all its ensembles sweep in lockstep under one shared ladder,
+    /// whose log gaps follow the Robbins–Monro recursion on the neighbour acceptance averaged
+    /// over the ensembles; the ladder is then frozen. Returns false when stopped early.
+    fn tune_together(ensembles: &mut [Self], mut tuning: Tuning, stop: &(dyn Fn() -> bool + Sync)) -> bool {
+        let k = ensembles[0].replicas.len();
+        let targets = &ensembles[0].targets;
         let mut log_gaps: Vec<f64> =
-            (1..k).map(|j| f64::from(self.targets[j].temper.a - self.targets[j - 1].temper.a).max(1e-6).ln()).collect();
+            (1..k).map(|j| f64::from(targets[j].temper.a - targets[j - 1].temper.a).max(1e-6).ln()).collect();
+        // Roughening saturates at α = 1 (a = 1 flattens every lobe completely), so gaps stay
+        // below 1/(K−1) and the ladder within (0, 1].
+        let max_gap = (1.0 / (k - 1) as f64).ln();
+        let mut finished = true;
         while tuning.sweeps > 0 {
-            if tuning.n % 64 == 0 && stop() {
-                self.discard_statistics();
-                return false;
+            if tuning.n % 16 == 0 && stop() {
+                finished = false;
+                break;
             }
-            for (chain, target) in self.replicas.iter_mut().zip(&self.targets) {
-                chain.mutate(target, None);
-            }
+            let alphas: Vec<Vec<f64>> = ensembles.par_iter_mut().map(Ensemble::tuning_sweep).collect();
             let gamma = (1.0 + tuning.n as f64 / 10.0).powf(-0.6);
-            let alphas: Vec<f64> = {
-                let mut cross = self.cross();
-                let alphas = (1..k).map(|j| swap_acceptance(&mut cross, j - 1, j)).collect();
-                cross.ensemble.cross_cache = cross.cache;
-                alphas
-            };
-            // Roughening saturates at α = 1 (a = 1 flattens every lobe completely), so gaps
-            // stay below 1/(K−1) and the ladder within (0, 1].
-            let max_gap = (1.0 / (k - 1) as f64).ln();
-            for (g, alpha) in log_gaps.iter_mut().zip(&alphas) {
-                *g = (*g + gamma * (alpha - tuning.target)).clamp(1e-5f64.ln(), max_gap);
+            for (j, g) in log_gaps.iter_mut().enumerate() {
+                let mean = alphas.iter().map(|a| a[j]).sum::<f64>() / alphas.len() as f64;
+                *g = (*g + gamma * (mean - tuning.target)).clamp(1e-5f64.ln(), max_gap);
             }
             let mut a = 0.0f64;
-            for (j, g) in log_gaps.iter().enumerate() {
-                a += g.exp();
-                self.targets[j + 1].temper.a = a as f32;
-            }
-            for j in 1..k {
-                let value = self.targets[j].value_of(self.replicas[j].state_mut());
-                self.replicas[j].state_mut().value = value;
-            }
-            self.swap();
+            let ladder: Vec<f32> = log_gaps
+                .iter()
+                .map(|g| {
+                    a += g.exp();
+                    a as f32
+                })
+                .collect();
+            ensembles.par_iter_mut().for_each(|e| {
+                e.set_ladder(&ladder);
+                e.swap();
+            });
             tuning.sweeps -= 1;
             tuning.n += 1;
         }
-        self.discard_statistics();
-        true
+        for e in ensembles.iter_mut() {
+            e.tuning = None;
+            e.discard_statistics();
+        }
+        finished
     }
 
     /// Burn-in statistics are discarded with its splats.
@@ -190,14 +215,6 @@ impl Ensemble<'_> {
 
 impl Walker for Ensemble<'_> {
     fn run(&mut self, mutations: u64, splats: &mut SplatBuffer, stop: &dyn Fn() -> bool) -> u64 {
-        if !self.tune(stop) {
-            return 0;
-        }
-        if let Some(plan) = self.calibration.take() {
-            let (reuse, rays) = Reuse::calibrate(&self.targets, &plan);
-            self.reuse = Some(reuse);
-            self.extra_rays += rays;
-        }
         if self.replicas.len() == 1 {
             return self.replicas[0].run(&self.targets[0], mutations, Some(splats), stop);
         }
@@ -243,6 +260,25 @@ impl Walker for Ensemble<'_> {
     }
 
     fn rays(&self) -> u64 {
-        self.replicas.iter().map(|r| r.rays).sum::<u64>() + self.extra_rays
+        self.replicas.iter().map(|r| r.rays).sum()
+    }
+
+    /// Tunes the depth's shared ladder, then (with reuse) calibrates the replicas' ratios.
+    fn prepare_group(ensembles: &mut [Self], group: &GroupContext, stop: &(dyn Fn() -> bool + Sync)) -> u64 {
+        if ensembles.is_empty() {
+            return 0;
+        }
+        if let Some(tuning) = ensembles[0].tuning.clone()
+            && !Self::tune_together(ensembles, tuning, stop)
+        {
+            return 0;
+        }
+        let Some(samples) = ensembles[0].calibration else { return 0 };
+        let (reuse, rays) = Reuse::calibrate(&ensembles[0].targets, group, samples);
+        for e in ensembles.iter_mut() {
+            e.reuse = Some(reuse.clone());
+            e.calibration = None;
+        }
+        rays
     }
 }

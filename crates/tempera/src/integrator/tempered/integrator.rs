@@ -3,7 +3,7 @@
 //! only strategy has no connection vertex, runs plain MMLT chains.
 
 use super::ensemble::{Ensemble, Tuning};
-use super::{Calibration, EquiEnergy, Neighbor, Permutation, SwapStrategy};
+use super::{EquiEnergy, Neighbor, Permutation, SwapStrategy};
 use crate::bidir::{Heuristic, Tempering};
 use crate::integrator::mmlt::{ChainSettings, MmltReport, StartContext, sampler_for};
 use crate::integrator::{ChainIntegrator, RenderControl, RenderOutput, RenderSettings};
@@ -135,16 +135,8 @@ impl ChainIntegrator for TemperedIntegrator {
                 rng: Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11),
                 swaps: SwapStats::new(ladder.len()),
                 cross_cache: Vec::new(),
-                calibration: (self.reuse_replicas && ladder.len() > 1).then_some(Calibration {
-                    seed,
-                    depth: k,
-                    ensemble: c,
-                    samples: (self.bootstrap / self.chains.max(1)).max(256),
-                    sigma: self.sigma,
-                    large_step_probability: self.large_step_probability,
-                }),
+                calibration: (self.reuse_replicas && ladder.len() > 1).then_some(self.bootstrap),
                 reuse: None,
-                extra_rays: 0,
                 tuning: (self.ladder.is_empty() && self.burn_in > 0 && ladder.len() > 1).then_some(Tuning {
                     sweeps: self.burn_in,
                     target: self.swap_target,

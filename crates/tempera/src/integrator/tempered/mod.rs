@@ -29,7 +29,7 @@ pub use equi_energy::EquiEnergy;
 pub use integrator::{Swap, TemperedIntegrator};
 pub use neighbor::Neighbor;
 pub use permutation::Permutation;
-pub use reuse::{Calibration, Reuse};
+pub use reuse::Reuse;
 
 use crate::math::rng::Pcg32;
 pub use crate::mcmc::SwapStats;

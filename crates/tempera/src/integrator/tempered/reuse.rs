@@ -7,48 +7,52 @@
 //! `I = (1/N) Σ_j Σ_n C_0(u_jn) / Σ_l f_l(u_jn)/b_l = (b_0/N) Σ_j Σ_n C_0(u_jn) / Σ_l f_l(u_jn)/ρ_l`
 //!
 //! with `ρ_l = b_l/b_0`, so a state splats `C_0/Σ_l f_l/ρ_l` and the driver's usual scale
-//! `b_0·N_pixels/M` (with the refined `b_0`) applies. The ratios are estimated per ensemble
-//! once its ladder is frozen, from fresh uniform primary samples evaluated under replica 0's
-//! target and cross-evaluated (no rays) under the others: `ρ_l = Σ_i f_l(u_i) / Σ_i f_0(u_i)`.
-//! A wrong `ρ_l` scales replica `l`'s share of the estimate, so the calibration needs enough
-//! samples (by default as many per ensemble as the bootstrap spends per chain).
+//! `b_0·N_pixels/M` (with the refined `b_0`) applies. The ratios are estimated per depth once
+//! the depth's shared ladder is frozen, from the depth's bootstrap samples (the same uniform
+//! primary samples that estimate `b_0`) evaluated again under replica 0's target and
+//! cross-evaluated (no rays) under the others: `ρ_l = Σ_i f_l(u_i) / Σ_i f_0(u_i)`. A wrong
+//! `ρ_l` scales replica `l`'s share of the estimate, which is why every bootstrap sample serves.
 
-use crate::math::rng::hash;
+use crate::integrator::mmlt::{GroupContext, sampler_for};
 use crate::mcmc::{Paths, Target, TemperedState, TemperedTarget};
-use crate::sampler::PssSampler;
+use rayon::prelude::*;
 
-/// The replicas' normalisation ratios `ρ_l = b_l/b_0` of one ensemble.
+/// The replicas' normalisation ratios `ρ_l = b_l/b_0` of one depth.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Reuse {
     pub ratios: Vec<f64>,
 }
 
-/// What a calibration needs to draw its samples.
-#[derive(Clone, Copy, Debug)]
-pub struct Calibration {
-    pub seed: u64,
-    pub depth: usize,
-    pub ensemble: usize,
-    pub samples: usize,
-    pub sigma: f32,
-    pub large_step_probability: f32,
-}
-
 impl Reuse {
-    /// Estimates the ratios from `plan.samples` uniform states; returns them with the rays traced.
-    pub fn calibrate(targets: &[TemperedTarget], plan: &Calibration) -> (Reuse, u64) {
+    /// Estimates the ratios from the first `samples` bootstrap samples of the group; returns
+    /// them with the rays traced. Sums are taken in sample order: the same at any thread count.
+    pub(in crate::integrator) fn calibrate(
+        targets: &[TemperedTarget],
+        group: &GroupContext,
+        samples: usize,
+    ) -> (Reuse, u64) {
         let k = targets.len();
+        let values: Vec<(Vec<f64>, u64)> = (0..samples)
+            .into_par_iter()
+            .map_init(
+                || (TemperedState::default(), Paths::default()),
+                |(state, paths), i| {
+                    let mut sampler = sampler_for(group.seed, group.k, i, group.settings);
+                    let mut rays = 0;
+                    targets[0].evaluate(&mut sampler, paths, &mut rays, state);
+                    if state.value <= 0.0 {
+                        return (Vec::new(), rays);
+                    }
+                    (targets.iter().map(|t| f64::from(t.value_of(state))).collect(), rays)
+                },
+            )
+            .collect();
         let mut sums = vec![0.0f64; k];
-        let (mut state, mut paths, mut rays) = (TemperedState::default(), Paths::default(), 0);
-        for i in 0..plan.samples {
-            let seed = hash(&[plan.seed, 0xca1b, plan.depth as u64, plan.ensemble as u64, i as u64]);
-            let mut sampler = PssSampler::new(seed, plan.depth as u64, plan.sigma, plan.large_step_probability);
-            targets[0].evaluate(&mut sampler, &mut paths, &mut rays, &mut state);
-            if state.value <= 0.0 {
-                continue;
-            }
-            for (sum, target) in sums.iter_mut().zip(targets) {
-                *sum += f64::from(target.value_of(&mut state));
+        let mut rays = 0;
+        for (v, r) in &values {
+            rays += r;
+            for (sum, x) in sums.iter_mut().zip(v) {
+                *sum += x;
             }
         }
         // Without light in the samples (or for a replica that saw none) the ratios stay 1: the
