@@ -186,6 +186,7 @@ impl Job<'_> {
     fn key(&self) -> serde_json::Value {
         let film = &self.scene.scene.film;
         serde_json::json!({
+            "tempera": env!("CARGO_PKG_VERSION"),
             "integrator": self.method.method.integrator,
             "args": self.method.method.args,
             "scene_file": self.scene.entry.file.as_ref().map(|p| p.display().to_string()),
