@@ -116,6 +116,22 @@ fn experiment_writes_results_images_and_report_and_resumes() {
     assert!(log.contains("[6/6] default · mmlt · seed 3: relMSE"), "{log}");
     let csv = std::fs::read_to_string(out_dir.join("results.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 12);
+
+    // A given reference image, at twice the scene's resolution: box-filtered down, not rendered.
+    let reference = out_dir.join("reference/default.exr");
+    let image = tempera_image::read_image(&reference, tempera_image::ColorEncoding::Linear).unwrap();
+    let big: Vec<_> = (0..48 * 48).map(|i| image.get(i % 48 / 2, i / 48 / 2)).collect();
+    let big = tempera::texture::Image::new(48, 48, big);
+    tempera_image::write_image(&dir.join("big.exr"), &big, &Default::default()).unwrap();
+    let given = TINY
+        .replace("output = \"out\"", "output = \"given\"")
+        .replace("[reference]\nmethod = \"bdpt\"\nspp = 16\n", "")
+        .replace("maxdepth = 4", "maxdepth = 4\nreference = \"big.exr\"");
+    let out = run(&dir, &given);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("rendering the reference"), "{}", stderr(&out));
+    let csv = std::fs::read_to_string(dir.join("given/results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 8, "{csv}");
 }
 
 #[test]

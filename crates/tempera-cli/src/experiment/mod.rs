@@ -39,6 +39,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     crate::render::install_interrupt_handler();
     let scenes = runs::prepare_scenes(&config)?;
     let mut records = Vec::new();
+    let mut references = Vec::new();
     let total = scenes.len() * config.methods.len() * config.budget.seeds.len();
     let mut index = 0;
     for scene in &scenes {
@@ -65,10 +66,11 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
                 records.extend(record);
             }
         }
+        references.push((scene.entry.name.clone(), reference.image));
     }
     let rows: Vec<&runs::Row> = records.iter().flat_map(|r| &r.rows).collect();
     runs::write_results(&config, &rows)?;
-    let path = report::write(&config, &scenes, &records)?;
+    let path = report::write(&config, &scenes, &records, &references)?;
     eprintln!("{} runs; results in {}, report {}", records.len(), config.output.display(), path.display());
     if crate::render::CANCEL.load(Ordering::Relaxed) {
         eprintln!("interrupted: finished runs are kept; run the same command again to finish the rest");

@@ -280,7 +280,12 @@ fn spread(
     }))
 }
 
-fn scene_report(config: &Config, scene: &PreparedScene, rows: &[&Row]) -> Result<SceneReport> {
+fn scene_report(
+    config: &Config,
+    scene: &PreparedScene,
+    rows: &[&Row],
+    reference: &tempera::texture::Image,
+) -> Result<SceneReport> {
     let name = &scene.entry.name;
     let groups = grouped(config, rows, name);
     let mut budgets = config.budget.seconds.clone();
@@ -312,18 +317,10 @@ fn scene_report(config: &Config, scene: &PreparedScene, rows: &[&Row]) -> Result
         }
         viewer.push(ViewerEntry { label: method.clone(), images });
     }
-    let reference = read_image(&config.output.join(format!("reference/{name}.exr")), ColorEncoding::Linear)
-        .or_else(|_| {
-            read_image(
-                scene.entry.reference.as_ref().or(config.reference.image.as_ref()).unwrap_or(&PathBuf::new()),
-                ColorEncoding::Linear,
-            )
-        })
-        .with_context(|| format!("scene '{name}': cannot read its reference"))?;
     let mut spread_rows = Vec::new();
     for (i, (method, by_time)) in groups.iter().enumerate() {
         if let Some(rows) = by_time.get(&last.to_bits())
-            && let Some(row) = spread(config, name, (i, method), rows, &reference)?
+            && let Some(row) = spread(config, name, (i, method), rows, reference)?
         {
             spread_rows.push(row);
         }
@@ -344,12 +341,21 @@ fn scene_report(config: &Config, scene: &PreparedScene, rows: &[&Row]) -> Result
 }
 
 /// Writes `report.html` for the finished runs; returns its path.
-pub fn write(config: &Config, scenes: &[PreparedScene], records: &[Record]) -> Result<PathBuf> {
+/// `references` holds each scene's reference image as the runs were compared with it.
+pub fn write(
+    config: &Config,
+    scenes: &[PreparedScene],
+    records: &[Record],
+    references: &[(String, tempera::texture::Image)],
+) -> Result<PathBuf> {
     let rows: Vec<&Row> = records.iter().flat_map(|r| &r.rows).collect();
     let mut reports = Vec::new();
     for scene in scenes {
-        if rows.iter().any(|r| r.scene == scene.entry.name) {
-            reports.push(scene_report(config, scene, &rows)?);
+        let reference = references.iter().find(|(name, _)| *name == scene.entry.name);
+        if let Some((_, reference)) = reference
+            && rows.iter().any(|r| r.scene == scene.entry.name)
+        {
+            reports.push(scene_report(config, scene, &rows, reference)?);
         }
     }
     let mut env = minijinja::Environment::new();
