@@ -46,6 +46,11 @@ pub struct Ensemble<'a> {
 /// lag behind, which measured a 0.05 lower acceptance than the target on the tuning test).
 const TUNING_BATCH: u64 = 1;
 
+/// Ensembles of a depth that tune its ladder in lockstep; the others settle for
+/// `1/SETTLE_FRACTION` of the burn-in under the tuned ladder, each on its own.
+const TUNING_ENSEMBLES: usize = 8;
+const SETTLE_FRACTION: u64 = 4;
+
 /// The state of the ladder's burn-in.
 #[derive(Clone, Debug)]
 pub struct Tuning {
@@ -166,8 +171,11 @@ impl Ensemble<'_> {
     /// The burn-in of one depth: all its ensembles sweep in lockstep under one shared ladder,
     /// whose log gaps follow the Robbins–Monro recursion on the neighbour acceptance averaged
     /// over the ensembles; the ladder is then frozen. Returns false when stopped early.
-    fn tune_together(ensembles: &mut [Self], mut tuning: Tuning, stop: &(dyn Fn() -> bool + Sync)) -> bool {
-        let k = ensembles[0].replicas.len();
+    fn tune_together(all: &mut [Self], mut tuning: Tuning, stop: &(dyn Fn() -> bool + Sync)) -> bool {
+        let k = all[0].replicas.len();
+        let total_sweeps = tuning.sweeps;
+        // The first few ensembles tune the ladder; the others only settle under the result.
+        let (ensembles, rest) = all.split_at_mut(all.len().min(TUNING_ENSEMBLES));
         let targets = &ensembles[0].targets;
         let mut log_gaps: Vec<f64> =
             (1..k).map(|j| f64::from(targets[j].temper.a - targets[j - 1].temper.a).max(1e-6).ln()).collect();
@@ -217,7 +225,18 @@ impl Ensemble<'_> {
             tuning.sweeps -= batch;
             tuning.n += batch;
         }
-        for e in ensembles.iter_mut() {
+        let ladder: Vec<f32> = ensembles[0].targets[1..].iter().map(|t| t.temper.a).collect();
+        let settle = if finished { total_sweeps / SETTLE_FRACTION } else { 0 };
+        rest.par_iter_mut().for_each(|e| {
+            e.set_ladder(&ladder);
+            for _ in 0..settle {
+                for (chain, target) in e.replicas.iter_mut().zip(&e.targets) {
+                    chain.mutate(target, None);
+                }
+                e.swap();
+            }
+        });
+        for e in all.iter_mut() {
             e.tuning = None;
             e.discard_statistics();
         }
