@@ -40,9 +40,8 @@ impl Reuse {
                     let mut sampler = sampler_for(group.seed, group.k, i, group.settings);
                     let mut rays = 0;
                     targets[0].evaluate(&mut sampler, paths, &mut rays, state);
-                    if state.value <= 0.0 {
-                        return (Vec::new(), rays);
-                    }
+                    // Every sample counts, also those replica 0 values at zero: a roughened
+                    // lobe can give them value under the other targets.
                     (targets.iter().map(|t| f64::from(t.value_of(state))).collect(), rays)
                 },
             )
