@@ -81,8 +81,8 @@ pub struct RenderArgs {
     /// Tempered MMLT: fixed roughening ladder a1,a2,… of replicas 1 … K−1 (increasing, positive).
     #[arg(long, value_parser = parse_ladder)]
     pub ladder: Option<Ladder>,
-    /// Tempered MMLT: burn-in sweeps per ensemble that tune the ladder (0: keep the default
-    /// ladder untuned; ignored with --ladder).
+    /// Tempered MMLT: burn-in sweeps that tune each depth's shared ladder (0: keep the
+    /// default ladder untuned; ignored with --ladder).
     #[arg(long, value_parser = clap::value_parser!(u64).range(0..=10_000_000))]
     pub burn_in: Option<u64>,
     /// Tempered MMLT: neighbour-swap acceptance the ladder tuning aims at.

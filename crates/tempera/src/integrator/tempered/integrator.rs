@@ -53,7 +53,8 @@ pub struct TemperedIntegrator {
     /// Recompute MIS weights from the roughened densities (default: keep the scene's, which
     /// measured better at equal time on the default scene; see the README).
     pub roughen_mis: bool,
-    /// Burn-in sweeps per ensemble that tune the ladder (without a fixed ladder; 0: no tuning).
+    /// Burn-in sweeps that tune each depth's shared ladder (without a fixed ladder; 0: no
+    /// tuning).
     pub burn_in: u64,
     /// Neighbour-swap acceptance the tuning aims at.
     pub swap_target: f64,
