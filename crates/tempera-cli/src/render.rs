@@ -200,17 +200,33 @@ pub fn integrator_name(args: &RenderArgs, scene: &Scene) -> String {
     }
 }
 
-fn progress_bar(args: &RenderArgs, budget: Budget, pixels: u64) -> ProgressBar {
-    if args.quiet || !std::io::stderr().is_terminal() {
+/// A progress bar for a render of `pixels` pixels under `budget`, labelled `label` when given;
+/// hidden when `quiet` or when standard error is not a terminal.
+pub fn progress_bar(quiet: bool, budget: Budget, pixels: u64, label: Option<&str>) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
     }
     let (len, template) = match budget {
-        Budget::Samples(spp) => (pixels * u64::from(spp), "{elapsed_precise} [{wide_bar}] {percent}% (eta {eta})"),
-        Budget::Time(d) => (d.as_millis() as u64, "{elapsed_precise} [{wide_bar}] {msg}"),
+        Budget::Samples(spp) => {
+            (pixels * u64::from(spp), "{prefix}{elapsed_precise} [{wide_bar}] {percent}% (eta {eta})")
+        }
+        Budget::Time(d) => (d.as_millis() as u64, "{prefix}{elapsed_precise} [{wide_bar}] {msg}"),
     };
     let bar = ProgressBar::new(len);
     bar.set_style(ProgressStyle::with_template(template).expect("valid template").progress_chars("=> "));
+    if let Some(label) = label {
+        bar.set_prefix(format!("{label} "));
+    }
     bar
+}
+
+/// Moves `bar` on for `n` more pixel samples (sample budgets) or to the time elapsed since
+/// `start` (time budgets): what a render's progress callback does.
+pub fn advance(bar: &ProgressBar, budget: Budget, start: Instant, n: u64) {
+    match budget {
+        Budget::Samples(_) => bar.inc(n),
+        Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
+    }
 }
 
 /// The integrator `name` with the options `args` give (the scene's maximum depth unless
@@ -277,12 +293,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let settings = RenderSettings { budget, seed: args.seed, threads: args.threads };
     let pixels = u64::from(scene.film.width) * u64::from(scene.film.height);
-    let bar = progress_bar(&args, budget, pixels);
+    let bar = progress_bar(args.quiet, budget, pixels, None);
     let start = Instant::now();
-    let on_progress = |n: u64| match budget {
-        Budget::Samples(_) => bar.inc(n),
-        Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
-    };
+    let on_progress = |n: u64| advance(&bar, budget, start, n);
     install_interrupt_handler();
     let control = RenderControl::new(&CANCEL, &on_progress);
     let out = integrator.try_render(&scene, &settings, &control).map_err(anyhow::Error::msg)?;

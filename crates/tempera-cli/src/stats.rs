@@ -32,6 +32,11 @@ fn swaps_json(s: &SwapStats) -> Value {
     })
 }
 
+/// The shortest decimal form of each `f32` (0.02, not 0.019999999552965164).
+fn shortest(values: &[f32]) -> Vec<f64> {
+    values.iter().map(|a| a.to_string().parse().unwrap_or(f64::from(*a))).collect()
+}
+
 fn depth_json(d: &DepthStats) -> Value {
     let proposed = d.large_steps_proposed + d.small_steps_proposed;
     let mut v = json!({
@@ -51,14 +56,10 @@ fn depth_json(d: &DepthStats) -> Value {
         "seconds": d.seconds,
     });
     if !d.ladder.is_empty() {
-        // Shortest decimal form of each f32 (0.02, not 0.019999999552965164).
-        let ladder: Vec<f64> = d.ladder.iter().map(|a| a.to_string().parse().unwrap_or(f64::from(*a))).collect();
-        v["ladder"] = json!(ladder);
+        v["ladder"] = json!(shortest(&d.ladder));
     }
     if !d.replica_b_ratios.is_empty() {
-        let ratios: Vec<f64> =
-            d.replica_b_ratios.iter().map(|a| a.to_string().parse().unwrap_or(f64::from(*a))).collect();
-        v["replica_b_ratios"] = json!(ratios);
+        v["replica_b_ratios"] = json!(shortest(&d.replica_b_ratios));
     }
     if let Some(swaps) = &d.swaps {
         v["swaps"] = swaps_json(swaps);

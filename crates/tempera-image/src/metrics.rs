@@ -53,14 +53,20 @@ pub fn rel_se(i: Rgb, r: Rgb) -> f64 {
     (i - r).powi(2) / (r * r + EPSILON)
 }
 
-/// Compares `image` with `reference`; they must have the same size.
-pub fn compare(image: &Image, reference: &Image) -> Result<Comparison, String> {
+/// An error naming both sizes unless `image` and `reference` have the same size.
+pub fn check_sizes(image: &Image, reference: &Image) -> Result<(), String> {
     if (image.width, image.height) != (reference.width, reference.height) {
         return Err(format!(
             "image is {}x{} but the reference is {}x{}",
             image.width, image.height, reference.width, reference.height
         ));
     }
+    Ok(())
+}
+
+/// Compares `image` with `reference`; they must have the same size.
+pub fn compare(image: &Image, reference: &Image) -> Result<Comparison, String> {
+    check_sizes(image, reference)?;
     let n = image.pixels.len().max(1) as f64;
     let (mut se, mut rel, mut smape, mut sum_i, mut sum_r) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for (&i, &r) in image.pixels.iter().zip(&reference.pixels) {
@@ -155,7 +161,7 @@ fn with_legend(map: Vec<Rgb>, w: usize, h: usize, colour: impl Fn(f64) -> Rgb, l
 /// The false-colour map of the per-pixel relMSE terms, with a colour bar and labels
 /// (`1e-4` … `1e0`) beneath; linear RGB, ready for any writer.
 pub fn error_map(image: &Image, reference: &Image) -> Result<Image, String> {
-    compare(image, reference)?;
+    check_sizes(image, reference)?;
     let values: Vec<f64> = image.pixels.iter().zip(&reference.pixels).map(|(&i, &r)| rel_se(i, r)).collect();
     Ok(value_map(&values, image.width, image.height))
 }

@@ -6,8 +6,6 @@ use super::config::Config;
 use super::runs::{PreparedScene, parse_flags};
 use crate::render::CANCEL;
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressStyle};
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use tempera::integrator::{Budget, RenderControl, RenderSettings};
@@ -132,30 +130,15 @@ fn render(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Referen
     };
     let film = &scene.scene.film;
     let pixels = u64::from(film.width) * u64::from(film.height);
-    let bar = if quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else {
-        let len = match budget {
-            Budget::Samples(spp) => pixels * u64::from(spp),
-            Budget::Time(d) => d.as_millis() as u64,
-        };
-        let bar = ProgressBar::new(len);
-        let style = ProgressStyle::with_template("{msg} {elapsed_precise} [{wide_bar}] {percent}% (eta {eta})")
-            .expect("valid template");
-        bar.set_style(style.progress_chars("=> "));
-        bar.set_message(format!("reference for {}", scene.entry.name));
-        bar
-    };
+    let label = format!("reference for {}", scene.entry.name);
+    let bar = crate::render::progress_bar(quiet, budget, pixels, Some(&label));
     let what = match budget {
         Budget::Samples(spp) => format!("{spp} spp"),
         Budget::Time(d) => format!("{} s", d.as_secs_f64()),
     };
     eprintln!("scene '{}': rendering the reference with {method}, {what}", scene.entry.name);
     let start = Instant::now();
-    let on_progress = |n: u64| match budget {
-        Budget::Samples(_) => bar.inc(n),
-        Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
-    };
+    let on_progress = |n: u64| crate::render::advance(&bar, budget, start, n);
     let control = RenderControl::new(&CANCEL, &on_progress);
     let settings = RenderSettings { budget, seed: r.seed.unwrap_or(DEFAULT_SEED), threads: config.threads };
     let out = integrator.try_render(&scene.scene, &settings, &control).map_err(anyhow::Error::msg);

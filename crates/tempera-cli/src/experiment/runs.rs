@@ -7,9 +7,7 @@ use super::reference::Reference;
 use crate::render::{CANCEL, RenderArgs};
 use anyhow::{Context, Result, bail};
 use clap::Parser;
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -137,25 +135,21 @@ pub struct Record {
     pub rows: Vec<Row>,
 }
 
-fn acceptance(chains: &[DepthStats]) -> Option<f64> {
-    let (mut accepted, mut proposed) = (0, 0);
-    for d in chains.iter().filter(|d| !d.all_depths || chains.len() == 1) {
-        accepted += d.large_steps_accepted + d.small_steps_accepted;
-        proposed += d.large_steps_proposed + d.small_steps_proposed;
+/// Every depth's chain statistics merged into one row.
+fn merged(chains: &[DepthStats]) -> DepthStats {
+    let mut all = DepthStats::default();
+    for d in chains {
+        all.merge(d);
     }
-    (proposed > 0).then(|| accepted as f64 / proposed as f64)
+    all
 }
 
-fn neighbor_acceptance(chains: &[DepthStats]) -> Option<f64> {
-    let (mut accepted, mut attempts) = (0, 0);
-    for s in chains.iter().filter_map(|d| d.swaps.as_ref()) {
-        let k = s.replicas;
-        for i in 0..k.saturating_sub(1) {
-            attempts += s.attempts[i * k + i + 1];
-            accepted += s.accepted[i * k + i + 1];
-        }
-    }
-    (attempts > 0).then(|| accepted as f64 / attempts as f64)
+fn acceptance(all: &DepthStats) -> Option<f64> {
+    (all.large_steps_proposed + all.small_steps_proposed > 0).then(|| all.acceptance())
+}
+
+fn neighbor_acceptance(all: &DepthStats) -> Option<f64> {
+    all.swaps.as_ref().filter(|s| s.neighbor_counts().0 > 0).map(|s| s.neighbor_acceptance())
 }
 
 /// A time as it appears in file names: `10`, `0.5`.
@@ -230,18 +224,6 @@ impl Job<'_> {
         Ok(record)
     }
 
-    fn progress(&self, label: &str, longest: f64, quiet: bool) -> ProgressBar {
-        if quiet || !std::io::stderr().is_terminal() {
-            return ProgressBar::hidden();
-        }
-        let bar = ProgressBar::new((longest * 1000.0) as u64);
-        let style =
-            ProgressStyle::with_template("{msg} {elapsed_precise} [{wide_bar}] {percent}%").expect("valid template");
-        bar.set_style(style.progress_chars("=> "));
-        bar.set_message(label.to_owned());
-        bar
-    }
-
     fn render(&self, label: &str, quiet: bool) -> Result<Option<Record>> {
         let times = self.config.times();
         let longest = *times.last().expect("a budget exists");
@@ -249,23 +231,16 @@ impl Job<'_> {
             times[..times.len() - 1].iter().map(|&t| Duration::from_secs_f64(t)).collect();
         let taken: Mutex<Vec<(usize, RenderOutput)>> = Mutex::new(Vec::new());
         let on_snapshot = |i: usize, out: &RenderOutput| {
-            let copy = RenderOutput {
-                image: out.image.clone(),
-                stats: out.stats.clone(),
-                layers: Vec::new(),
-                chains: out.chains.clone(),
-            };
-            taken.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push((i, copy));
+            taken.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push((i, out.clone()));
         };
-        let bar = self.progress(label, longest, quiet);
+        let budget = Budget::Time(Duration::from_secs_f64(longest));
+        let film = &self.scene.scene.film;
+        let pixels = u64::from(film.width) * u64::from(film.height);
+        let bar = crate::render::progress_bar(quiet, budget, pixels, Some(label));
         let start = Instant::now();
-        let on_progress = |_: u64| bar.set_position(start.elapsed().as_millis() as u64);
+        let on_progress = |n: u64| crate::render::advance(&bar, budget, start, n);
         let control = RenderControl::new(&CANCEL, &on_progress).with_snapshots(&snapshot_times, &on_snapshot);
-        let settings = RenderSettings {
-            budget: Budget::Time(Duration::from_secs_f64(longest)),
-            seed: self.seed,
-            threads: self.config.threads,
-        };
+        let settings = RenderSettings { budget, seed: self.seed, threads: self.config.threads };
         let integrator = self.method.integrator.as_ref();
         let out = integrator.try_render(&self.scene.scene, &settings, &control).map_err(anyhow::Error::msg);
         bar.finish_and_clear();
@@ -286,6 +261,7 @@ impl Job<'_> {
     fn row(&self, time: f64, out: &RenderOutput, integrator: &str) -> Result<Row> {
         let c = metrics::compare(&out.image, &self.reference.image).map_err(anyhow::Error::msg)?;
         let pixels = f64::from(self.scene.scene.film.width) * f64::from(self.scene.scene.film.height);
+        let all = merged(&out.chains);
         let image = if self.config.budget.seconds.contains(&time) { Some(self.write_images(time, out)?) } else { None };
         Ok(Row {
             scene: self.scene.entry.name.clone(),
@@ -300,8 +276,8 @@ impl Job<'_> {
             flip: c.flip,
             mean_ratio: c.mean_ratio,
             samples_per_pixel: out.stats.pixel_samples as f64 / pixels.max(1.0),
-            acceptance: acceptance(&out.chains),
-            neighbor_acceptance: neighbor_acceptance(&out.chains),
+            acceptance: acceptance(&all),
+            neighbor_acceptance: neighbor_acceptance(&all),
             image,
             stats: crate::stats::to_json(integrator, out),
         })

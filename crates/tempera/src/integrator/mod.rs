@@ -117,6 +117,7 @@ pub struct RenderStats {
     pub cancelled: bool,
 }
 
+#[derive(Clone)]
 pub struct RenderOutput {
     pub image: Image,
     pub stats: RenderStats,

@@ -123,14 +123,17 @@ impl SwapStats {
         self.main_changed += o.main_changed;
     }
 
+    /// Attempted and accepted exchanges between neighbours `(i, i + 1)`, over all pairs.
+    pub fn neighbor_counts(&self) -> (u64, u64) {
+        let k = self.replicas;
+        (0..k.saturating_sub(1))
+            .map(|i| (self.attempts[i * k + i + 1], self.accepted[i * k + i + 1]))
+            .fold((0, 0), |(a, b), (x, y)| (a + x, b + y))
+    }
+
     /// Acceptance rate of exchanges between neighbours `(i, i + 1)` over all their attempts.
     pub fn neighbor_acceptance(&self) -> f64 {
-        let k = self.replicas;
-        let (mut attempts, mut accepted) = (0, 0);
-        for i in 0..k.saturating_sub(1) {
-            attempts += self.attempts[i * k + i + 1];
-            accepted += self.accepted[i * k + i + 1];
-        }
+        let (attempts, accepted) = self.neighbor_counts();
         if attempts == 0 { 0.0 } else { accepted as f64 / attempts as f64 }
     }
 }

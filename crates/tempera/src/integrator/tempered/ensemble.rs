@@ -41,11 +41,6 @@ pub struct Ensemble<'a> {
     pub reuse: Option<Reuse>,
 }
 
-/// Burn-in sweeps each ensemble makes between two updates of the shared ladder (1: the
-/// recursion steps after every sweep; larger batches synchronise the threads less often but
-/// lag behind, which measured a 0.05 lower acceptance than the target on the tuning test).
-const TUNING_BATCH: u64 = 1;
-
 /// Ensembles of a depth that tune its ladder in lockstep; the others settle for
 /// `1/SETTLE_FRACTION` of the burn-in under the tuned ladder, each on its own.
 const TUNING_ENSEMBLES: usize = 8;
@@ -146,12 +141,17 @@ impl<'a> Ensemble<'a> {
 }
 
 impl Ensemble<'_> {
-    /// One burn-in sweep: a mutation per replica (no splats); returns the probability of
-    /// accepting an exchange of each neighbouring pair of the current states.
-    fn tuning_sweep(&mut self) -> Vec<f64> {
+    /// One mutation per replica, splatting nothing.
+    fn sweep_without_splats(&mut self) {
         for (chain, target) in self.replicas.iter_mut().zip(&self.targets) {
             chain.mutate(target, None);
         }
+    }
+
+    /// One burn-in sweep: a mutation per replica (no splats); returns the probability of
+    /// accepting an exchange of each neighbouring pair of the current states.
+    fn tuning_sweep(&mut self) -> Vec<f64> {
+        self.sweep_without_splats();
         let k = self.replicas.len();
         let mut cross = self.cross();
         let alphas = (1..k).map(|j| swap_acceptance(&mut cross, j - 1, j)).collect();
@@ -188,30 +188,21 @@ impl Ensemble<'_> {
                 finished = false;
                 break;
             }
-            // Each ensemble makes a batch of sweeps under the current ladder; the recursion then
-            // takes one step per sweep with the batch's mean acceptance (fewer synchronisations
-            // between threads than one per sweep).
-            let batch = tuning.sweeps.min(TUNING_BATCH);
-            let sums: Vec<Vec<f64>> = ensembles
+            // One sweep of every tuning ensemble, then one step of the recursion with their
+            // mean acceptance. (Stepping once per batch of sweeps synchronises the threads less
+            // often, but the ladder lags behind: 0.05 below the target on the tuning test.)
+            let alphas: Vec<Vec<f64>> = ensembles
                 .par_iter_mut()
                 .map(|e| {
-                    let mut sum = vec![0.0; k - 1];
-                    for _ in 0..batch {
-                        for (s, a) in sum.iter_mut().zip(e.tuning_sweep()) {
-                            *s += a;
-                        }
-                        e.swap();
-                    }
-                    sum
+                    let alphas = e.tuning_sweep();
+                    e.swap();
+                    alphas
                 })
                 .collect();
-            let count = (batch as usize * sums.len()) as f64;
+            let gamma = (1.0 + tuning.n as f64 / 10.0).powf(-0.6);
             for (j, g) in log_gaps.iter_mut().enumerate() {
-                let mean = sums.iter().map(|s| s[j]).sum::<f64>() / count;
-                for n in tuning.n..tuning.n + batch {
-                    let gamma = (1.0 + n as f64 / 10.0).powf(-0.6);
-                    *g = (*g + gamma * (mean - tuning.target)).clamp(1e-5f64.ln(), max_gap);
-                }
+                let mean = alphas.iter().map(|a| a[j]).sum::<f64>() / alphas.len() as f64;
+                *g = (*g + gamma * (mean - tuning.target)).clamp(1e-5f64.ln(), max_gap);
             }
             let mut a = 0.0f64;
             let ladder: Vec<f32> = log_gaps
@@ -222,17 +213,15 @@ impl Ensemble<'_> {
                 })
                 .collect();
             ensembles.par_iter_mut().for_each(|e| e.set_ladder(&ladder));
-            tuning.sweeps -= batch;
-            tuning.n += batch;
+            tuning.sweeps -= 1;
+            tuning.n += 1;
         }
         let ladder: Vec<f32> = ensembles[0].targets[1..].iter().map(|t| t.temper.a).collect();
         let settle = if finished { total_sweeps / SETTLE_FRACTION } else { 0 };
         rest.par_iter_mut().for_each(|e| {
             e.set_ladder(&ladder);
             for _ in 0..settle {
-                for (chain, target) in e.replicas.iter_mut().zip(&e.targets) {
-                    chain.mutate(target, None);
-                }
+                e.sweep_without_splats();
                 e.swap();
             }
         });
