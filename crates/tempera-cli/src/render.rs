@@ -99,6 +99,9 @@ pub struct RenderArgs {
     /// Tempered MMLT: replica 0 alone writes the image (the default).
     #[arg(long, overrides_with = "reuse_replicas")]
     pub no_reuse_replicas: bool,
+    /// Tempered MMLT: sweeps (one mutation per replica) between swap steps.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub swap_every: Option<u64>,
     /// Treat scene-loading warnings (unknown directives, unused parameters, approximations) as
     /// errors.
     #[arg(long)]
@@ -269,6 +272,7 @@ pub fn build_integrator(args: &RenderArgs, scene: &Scene, name: &str) -> Result<
         } else {
             None
         },
+        swap_every: args.swap_every,
     };
     integrator::create(name, &options).with_context(|| format!("unknown integrator '{name}'"))
 }

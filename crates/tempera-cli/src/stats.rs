@@ -61,6 +61,9 @@ fn depth_json(d: &DepthStats) -> Value {
     if !d.replica_b_ratios.is_empty() {
         v["replica_b_ratios"] = json!(shortest(&d.replica_b_ratios));
     }
+    if !d.replica_b.is_empty() {
+        v["replica_b"] = json!(d.replica_b);
+    }
     if let Some(swaps) = &d.swaps {
         v["swaps"] = swaps_json(swaps);
     }

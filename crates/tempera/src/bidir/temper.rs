@@ -3,7 +3,7 @@
 //! while every other vertex, the camera and the emitters stay as they are. Nothing is ever
 //! sampled *from* a connection vertex, so the same subpaths describe the same path under every
 //! tempered target, and the re-evaluation needs no rays: the connection's visibility and
-//! geometry are those [`connect`](super::connect) found, kept in [`Connection::base`].
+//! geometry are those [`connect`](super::connect()) found, kept in [`Connection::base`].
 //!
 //! Which vertices are connection vertices: `q_s` and `p_t` for `s, t ≥ 2`; the surface vertex
 //! joined to a sampled light (`s = 1`) or camera (`t = 1`) point. A camera path that hits an

@@ -64,16 +64,33 @@ pub(super) struct ChainSettings {
     pub large_step_probability: f32,
 }
 
+/// Running sums `(Σv, Σv², n)` of a target's values over independent uniform samples.
+pub(crate) type Moments = (f64, f64, u64);
+
 /// A unit of parallel work of the chain driver: one chain (MMLT, PSSMLT) or one ensemble of
 /// replicas (tempered MMLT).
+///
+/// A walker splats into one or more layers per group. Layer `l`'s splats are normalised by
+/// `b_l / ρ_l`, where `b_l` is the mean of target `l` over the group's bootstrap and the large
+/// steps of the chains sampling it, and `ρ_l` the ratio the walker weighted them with; a single
+/// layer is MMLT's `b_k` with `ρ_0 = 1`.
 pub(super) trait Walker: Send {
-    /// Makes up to `mutations` mutations of the main chain, splatting into `splats`; returns
-    /// how many were made.
-    fn run(&mut self, mutations: u64, splats: &mut SplatBuffer, stop: &dyn Fn() -> bool) -> u64;
+    /// Makes up to `mutations` mutations of the main chain, splatting into `splats` (one
+    /// buffer per layer); returns how many were made.
+    fn run(&mut self, mutations: u64, splats: &mut [SplatBuffer], stop: &dyn Fn() -> bool) -> u64;
     /// The main chain's statistics (with swap statistics for ensembles).
     fn stats(&self) -> DepthStats;
-    /// Sum, sum of squares and count of the main chain's large-step proposal values.
-    fn large(&self) -> (f64, f64, u64);
+    /// The layers this walker splats into (fixed once its group is prepared).
+    fn layers(&self) -> usize {
+        1
+    }
+    /// The moments of the large-step proposal values of the chains normalising `layer`.
+    fn large(&self, layer: usize) -> Moments;
+    /// With several layers: per layer, the moments of its target over the group's bootstrap
+    /// (shared by the group's walkers) and the ratio `ρ_l` its splats were weighted with.
+    fn calibration(&self) -> Option<(&[Moments], &[f64])> {
+        None
+    }
     fn rays(&self) -> u64;
     /// Prepares the walkers of one group together, before the first round (tempered MMLT
     /// tunes one ladder per depth and calibrates the replicas' normalisations here); returns
@@ -114,15 +131,15 @@ impl<T: Target + Send> Walker for Single<T>
 where
     T::State: Send,
 {
-    fn run(&mut self, mutations: u64, splats: &mut SplatBuffer, stop: &dyn Fn() -> bool) -> u64 {
-        self.chain.run(&self.target, mutations, Some(splats), stop)
+    fn run(&mut self, mutations: u64, splats: &mut [SplatBuffer], stop: &dyn Fn() -> bool) -> u64 {
+        self.chain.run(&self.target, mutations, Some(&mut splats[0]), stop)
     }
 
     fn stats(&self) -> DepthStats {
         self.chain.stats.clone()
     }
 
-    fn large(&self) -> (f64, f64, u64) {
+    fn large(&self, _layer: usize) -> Moments {
         self.chain.large
     }
 
@@ -169,41 +186,62 @@ struct Bootstrap {
     invalid: u64,
 }
 
-/// Per-thread, per-depth splat buffers, locked once per chain run.
-struct ThreadSplats(Vec<Mutex<Vec<SplatBuffer>>>);
+/// Per-thread splat buffers, one per layer of each group, locked once per walker run.
+struct ThreadSplats {
+    threads: Vec<Mutex<Vec<SplatBuffer>>>,
+    /// Index of each group's first layer; the last entry is the number of buffers.
+    offsets: Vec<usize>,
+    w: u32,
+    h: u32,
+}
 
 impl ThreadSplats {
-    fn new(threads: usize, depths: usize, w: u32, h: u32) -> Self {
-        Self((0..threads).map(|_| Mutex::new((0..depths).map(|_| SplatBuffer::new(w, h)).collect())).collect())
+    fn new(threads: usize, layers: &[usize], w: u32, h: u32) -> Self {
+        let mut offsets = vec![0];
+        for &l in layers {
+            offsets.push(offsets.last().copied().unwrap_or(0) + l);
+        }
+        let n = offsets.last().copied().unwrap_or(0);
+        let threads = (0..threads).map(|_| Mutex::new(vec![SplatBuffer::new(w, h); n])).collect();
+        Self { threads, offsets, w, h }
     }
 
-    fn with<R>(&self, depth: usize, f: impl FnOnce(&mut SplatBuffer) -> R) -> R {
-        let index = rayon::current_thread_index().unwrap_or(0) % self.0.len();
-        let mut guard = self.0[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        f(&mut guard[depth])
+    fn with<R>(&self, group: usize, f: impl FnOnce(&mut [SplatBuffer]) -> R) -> R {
+        let index = rayon::current_thread_index().unwrap_or(0) % self.threads.len();
+        let mut guard = self.threads[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        f(&mut guard[self.offsets[group]..self.offsets[group + 1]])
     }
 
-    /// The per-depth sums so far, leaving the buffers as they are.
-    fn snapshot(&self, depths: usize, w: u32, h: u32) -> Vec<SplatBuffer> {
-        let mut out = vec![SplatBuffer::new(w, h); depths];
-        for buffer in &self.0 {
+    /// Per group, per layer, the sums over the threads so far, leaving the buffers as they are.
+    fn snapshot(&self) -> Vec<Vec<SplatBuffer>> {
+        let mut out = vec![SplatBuffer::new(self.w, self.h); self.offsets.last().copied().unwrap_or(0)];
+        for buffer in &self.threads {
             let buffer = buffer.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
             for (total, b) in out.iter_mut().zip(buffer.iter()) {
                 total.merge(b);
             }
         }
-        out
+        self.split(out)
     }
 
-    fn merged(self, depths: usize, w: u32, h: u32) -> Vec<SplatBuffer> {
-        let mut out = vec![SplatBuffer::new(w, h); depths];
-        for buffer in self.0 {
-            let buffer = buffer.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
-            for (total, b) in out.iter_mut().zip(&buffer) {
-                total.merge(b);
+    fn merged(self) -> Vec<Vec<SplatBuffer>> {
+        let mut out = vec![SplatBuffer::new(self.w, self.h); self.offsets.last().copied().unwrap_or(0)];
+        for buffer in &self.threads {
+            let mut buffer = buffer.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            for (total, b) in out.iter_mut().zip(buffer.drain(..)) {
+                total.merge(&b);
             }
         }
-        out
+        self.split(out)
+    }
+
+    fn split(&self, mut all: Vec<SplatBuffer>) -> Vec<Vec<SplatBuffer>> {
+        let mut groups = Vec::with_capacity(self.offsets.len() - 1);
+        for pair in self.offsets.windows(2).rev() {
+            groups.push(all.split_off(pair[0]));
+        }
+        groups.reverse();
+        groups
     }
 }
 
@@ -322,12 +360,16 @@ impl ChainSettings {
             total_rays += W::prepare_group(&mut chains[first..end], &GroupContext { k, seed, settings: self }, &stop);
             first = end;
         }
-        let splats = ThreadSplats::new(rayon::current_num_threads().max(1), depths, w, h);
+        let mut layers = vec![1; depths];
+        for (chain, &(k, ..)) in chains.iter().zip(&plan) {
+            layers[k] = layers[k].max(chain.layers());
+        }
+        let splats = ThreadSplats::new(rayon::current_num_threads().max(1), &layers, w, h);
         let run_round = |chains: &mut [W], quota: &(dyn Fn(usize) -> u64 + Sync)| {
             chains.par_iter_mut().enumerate().for_each(|(i, chain)| {
                 let (k, ..) = plan[i];
                 let n = quota(i);
-                let done = splats.with(k, |buffer| chain.run(n, buffer, &stop));
+                let done = splats.with(k, |buffers| chain.run(n, buffers, &stop));
                 (control.on_progress)(done);
             });
         };
@@ -349,7 +391,7 @@ impl ChainSettings {
                         ((share(k) * pixels as f64 / n as f64).round() as u64).max(1)
                     });
                     if clock.due() && !control.cancel.load(Ordering::Relaxed) {
-                        let out = develop(&boots, &chains, &plan, &splats.snapshot(depths, w, h), pixels);
+                        let out = develop(&boots, &chains, &plan, &splats.snapshot(), pixels);
                         let seconds = start.elapsed().as_secs_f64();
                         let out = RenderOutput {
                             stats: RenderStats { rays: out.stats.rays + total_rays, seconds, ..out.stats },
@@ -360,7 +402,7 @@ impl ChainSettings {
                 }
             }
         }
-        let out = develop(&boots, &chains, &plan, &splats.merged(depths, w, h), pixels);
+        let out = develop(&boots, &chains, &plan, &splats.merged(), pixels);
         let out = RenderOutput {
             stats: RenderStats {
                 rays: out.stats.rays + total_rays,
@@ -380,47 +422,71 @@ impl ChainSettings {
 type Plan = [(usize, usize, u64, Option<u64>)];
 
 /// The image and per-group statistics of `chains` so far: statistics merged in chain order,
-/// `b_k` refined with the large-step proposals, each group's splats scaled to estimate its
-/// image per mutation. Rays count the chains' rays only.
+/// each layer's normalisation `b_l` refined with the large-step proposals, each layer's splats
+/// scaled to estimate its share of the image per mutation. Rays count the chains' rays only.
 fn develop<W: Walker>(
     boots: &[Bootstrap],
     chains: &[W],
     plan: &Plan,
-    per_depth: &[SplatBuffer],
+    per_group: &[Vec<SplatBuffer>],
     pixels: u64,
 ) -> RenderOutput {
     let depths = boots.len();
     let mut stats: Vec<DepthStats> = (0..depths).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect();
-    let mut large: Vec<(f64, f64, u64)> = vec![(0.0, 0.0, 0); depths];
+    let mut large: Vec<Vec<Moments>> = per_group.iter().map(|g| vec![(0.0, 0.0, 0); g.len()]).collect();
+    let mut calibration: Vec<Option<(Vec<Moments>, Vec<f64>)>> = vec![None; depths];
     let mut rays = 0;
     for (chain, &(k, ..)) in chains.iter().zip(plan) {
         stats[k].merge(&chain.stats());
-        let l = chain.large();
-        large[k] = (large[k].0 + l.0, large[k].1 + l.1, large[k].2 + l.2);
+        for (l, sums) in large[k].iter_mut().enumerate() {
+            let m = chain.large(l);
+            *sums = (sums.0 + m.0, sums.1 + m.1, sums.2 + m.2);
+        }
+        if calibration[k].is_none() {
+            calibration[k] = chain.calibration().map(|(m, r)| (m.to_vec(), r.to_vec()));
+        }
         rays += chain.rays();
     }
-    let (w, h) = per_depth.first().map_or((0, 0), |b| (b.width, b.height));
+    let (w, h) = per_group.first().and_then(|g| g.first()).map_or((0, 0), |b| (b.width, b.height));
     let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
     let mut invalid = 0;
     for (k, d) in stats.iter_mut().enumerate() {
         let boot = &boots[k];
-        let n = boot.values.len() as u64 + large[k].2;
-        let sum = boot.mean * boot.values.len() as f64 + large[k].0;
-        let sum2 = boot.sum2 + large[k].1;
-        d.b = if n > 0 { sum / n as f64 } else { 0.0 };
-        let var = if n > 1 { (sum2 / n as f64 - d.b * d.b).max(0.0) * n as f64 / (n - 1) as f64 } else { 0.0 };
-        d.b_rel_se = if d.b > 0.0 { (var / n as f64).sqrt() / d.b } else { 0.0 };
-        d.bootstrap_samples = boot.values.len() as u64;
-        d.large_step_samples = large[k].2;
+        let n_boot = boot.values.len() as u64;
+        let layer0 = (boot.mean * n_boot as f64, boot.sum2, n_boot);
+        // Mean and relative standard error of a target from its bootstrap and large-step sums.
+        let refine = |prior: Moments, large: Moments| {
+            let (sum, sum2, n) = (prior.0 + large.0, prior.1 + large.1, prior.2 + large.2);
+            let b = if n > 0 { sum / n as f64 } else { 0.0 };
+            let var = if n > 1 { (sum2 / n as f64 - b * b).max(0.0) * n as f64 / (n - 1) as f64 } else { 0.0 };
+            (b, if b > 0.0 { (var / n as f64).sqrt() / b } else { 0.0 })
+        };
+        (d.b, d.b_rel_se) = refine(layer0, large[k][0]);
+        d.bootstrap_samples = n_boot;
+        d.large_step_samples = large[k][0].2;
         d.invalid += boot.invalid;
-        invalid += d.invalid + per_depth[k].invalid;
+        invalid += d.invalid + per_group[k].iter().map(|b| b.invalid).sum::<u64>();
         if d.mutations == 0 {
             continue;
         }
-        // Each depth's splats estimate its image per mutation: N_pixels · b_k / M_k.
-        let layer = per_depth[k].image(d.b * pixels as f64 / d.mutations as f64);
-        for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
-            *p += *q;
+        // Layer l estimates its share of the depth's image per mutation: N_pixels · b_l/ρ_l / M_k
+        // (MMLT's N_pixels · b_k / M_k for one layer).
+        for (l, buffer) in per_group[k].iter().enumerate() {
+            let (b, ratio) = match (&calibration[k], l) {
+                (_, 0) => (d.b, 1.0),
+                (Some((moments, ratios)), l) => (refine(moments[l], large[k][l]).0, ratios[l]),
+                (None, _) => continue,
+            };
+            if l > 0 {
+                d.replica_b.push(b);
+            }
+            let layer = buffer.image(b / ratio * pixels as f64 / d.mutations as f64);
+            for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
+                *p += *q;
+            }
+        }
+        if !d.replica_b.is_empty() {
+            d.replica_b.insert(0, d.b);
         }
     }
     let mutations: u64 = stats.iter().map(|d| d.mutations).sum();

@@ -220,6 +220,8 @@ pub struct IntegratorOptions {
     pub swap_target: Option<f64>,
     /// Tempered MMLT: every replica contributes to the image (`None`: the default).
     pub reuse_replicas: Option<bool>,
+    /// Tempered MMLT: sweeps between swap steps (`None`: the default).
+    pub swap_every: Option<u64>,
 }
 
 /// The integrator called `name`.
@@ -252,6 +254,7 @@ pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integra
                 burn_in: options.burn_in.unwrap_or(m.burn_in),
                 swap_target: options.swap_target.unwrap_or(m.swap_target),
                 reuse_replicas: options.reuse_replicas.unwrap_or(m.reuse_replicas),
+                swap_every: options.swap_every.unwrap_or(m.swap_every),
                 ..m
             }))
         }

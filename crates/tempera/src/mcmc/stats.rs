@@ -29,6 +29,9 @@ pub struct DepthStats {
     /// Tempered MMLT with all-replica reuse: the normalisation ratios `b_l/b_0` of the
     /// replicas (mean over the ensembles, like the ladder); empty otherwise.
     pub replica_b_ratios: Vec<f32>,
+    /// Tempered MMLT with all-replica reuse: each replica's normalisation `b_l` refined with
+    /// its large steps (the first is `b`); empty otherwise.
+    pub replica_b: Vec<f64>,
 }
 
 impl DepthStats {

@@ -6,20 +6,27 @@
 //! balance-heuristic weight.
 //!
 //! Ladder tuning, one shared ladder per depth: during a burn-in of `sweeps` sweeps, in which
-//! all the depth's ensembles sweep in lockstep (splats discarded, statistics reset afterwards),
-//! the gaps `a_j − a_{j−1}` follow a Robbins–Monro recursion on their logarithm,
+//! the depth's first [`TUNING_ENSEMBLES`] ensembles sweep in lockstep (splats discarded), the
+//! gaps `a_j − a_{j−1}` follow a Robbins–Monro recursion on their logarithm,
 //! `ln g_j += γ_n (ᾱ_j − α*)` with `γ_n = (1 + n/10)^−0.6`, where `ᾱ_j` is the probability of
-//! exchanging replicas `j − 1` and `j` (whatever the swap strategy) averaged over the
+//! exchanging replicas `j − 1` and `j` (whatever the swap strategy) averaged over those
 //! ensembles and `α*` the target (0.234). A shared ladder lets one calibration from the
-//! depth's bootstrap serve all-replica reuse, and averages out the noise of single ensembles. Wider gaps lower the acceptance, so the recursion settles where the
-//! neighbour acceptance averages `α*`; the ladder is then frozen. Gaps are capped at `1/(K−1)`:
-//! beyond `a = 1` roughening changes nothing, and on scenes whose connections are mostly
-//! diffuse the acceptance stays above `α*` even at the cap.
+//! depth's bootstrap serve all-replica reuse, and averages out the noise of single ensembles.
+//! Wider gaps lower the acceptance, so the recursion settles where the neighbour acceptance
+//! averages `α*`; the ladder is then frozen. Gaps are capped at `1/(K−1)`: beyond `a = 1`
+//! roughening changes nothing, and on scenes whose connections are mostly diffuse the
+//! acceptance stays above `α*` even at the cap.
+//!
+//! Once the ladder is frozen (tuned or given), the depth's bootstrap samples are valued under
+//! every replica's target and every replica of every ensemble restarts from them in
+//! proportion to its own target, as MMLT's chains start: the ensembles then begin in their
+//! stationary distribution, and no settling sweeps are needed. Statistics start afresh.
 
-use super::reuse::Reuse;
+use super::reuse::{Calibration, Reuse};
 use super::{CrossValues, SwapStrategy, swap_acceptance};
 use crate::film::SplatBuffer;
-use crate::integrator::mmlt::{GroupContext, Walker};
+use crate::integrator::mmlt::{GroupContext, Moments, Walker, sampler_for};
+use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
 use crate::mcmc::{Chain, DepthStats, State, SwapStats, TemperedState, TemperedTarget};
 use rayon::prelude::*;
@@ -34,17 +41,20 @@ pub struct Ensemble<'a> {
     pub tuning: Option<Tuning>,
     /// Storage for the cross-evaluations of one swap step, reused across sweeps.
     pub(super) cross_cache: Vec<Option<f64>>,
-    /// All-replica reuse: whether the depth's ratios are still to be calibrated (from this
-    /// many bootstrap samples) once the ladder is frozen, then the ratios every replica's
-    /// splats are weighted with.
-    pub calibration: Option<usize>,
+    /// Bootstrap samples that value the replicas' targets once the ladder is frozen (to
+    /// restart the replicas and, with reuse, to calibrate their normalisations).
+    pub calibration_samples: usize,
+    /// Whether every replica is to contribute to the image.
+    pub reuse_replicas: bool,
+    /// All-replica reuse, once calibrated: the ratios every replica's splats are weighted with.
     pub reuse: Option<Reuse>,
+    /// A swap step after every `swap_every` sweeps; sweeps made since the render began.
+    pub swap_every: u64,
+    pub sweeps: u64,
 }
 
-/// Ensembles of a depth that tune its ladder in lockstep; the others settle for
-/// `1/SETTLE_FRACTION` of the burn-in under the tuned ladder, each on its own.
+/// Ensembles of a depth that tune its ladder in lockstep; the others wait for the result.
 const TUNING_ENSEMBLES: usize = 8;
-const SETTLE_FRACTION: u64 = 4;
 
 /// The state of the ladder's burn-in.
 #[derive(Clone, Debug)]
@@ -173,8 +183,7 @@ impl Ensemble<'_> {
     /// over the ensembles; the ladder is then frozen. Returns false when stopped early.
     fn tune_together(all: &mut [Self], mut tuning: Tuning, stop: &(dyn Fn() -> bool + Sync)) -> bool {
         let k = all[0].replicas.len();
-        let total_sweeps = tuning.sweeps;
-        // The first few ensembles tune the ladder; the others only settle under the result.
+        // The first few ensembles tune the ladder; the others take it when it is frozen.
         let (ensembles, rest) = all.split_at_mut(all.len().min(TUNING_ENSEMBLES));
         let targets = &ensembles[0].targets;
         let mut log_gaps: Vec<f64> =
@@ -217,19 +226,28 @@ impl Ensemble<'_> {
             tuning.n += 1;
         }
         let ladder: Vec<f32> = ensembles[0].targets[1..].iter().map(|t| t.temper.a).collect();
-        let settle = if finished { total_sweeps / SETTLE_FRACTION } else { 0 };
-        rest.par_iter_mut().for_each(|e| {
-            e.set_ladder(&ladder);
-            for _ in 0..settle {
-                e.sweep_without_splats();
-                e.swap();
-            }
-        });
-        for e in all.iter_mut() {
-            e.tuning = None;
-            e.discard_statistics();
-        }
+        rest.par_iter_mut().for_each(|e| e.set_ladder(&ladder));
         finished
+    }
+
+    /// Draws every replica's state afresh from the depth's bootstrap in proportion to its own
+    /// target (`values[i][j] = f_j(u_i)`), as MMLT starts its chains: each replica then starts
+    /// (up to the bootstrap's resolution) in its own stationary distribution, and so does the
+    /// ensemble, whose invariant distribution is the product of the replicas' targets.
+    /// Replicas started from replica 0's distribution instead sit where `f_0` is large while
+    /// their flatter targets are still being explored, and a short render inherits that
+    /// start-up bias: the hot replicas' states then over-represent replica 0's modes.
+    fn restart(&mut self, starts: &[Option<Distribution1D>], group: &GroupContext) {
+        for (j, start) in starts.iter().enumerate() {
+            let Some(start) = start else { continue };
+            let (index, _, _) = start.sample_discrete(self.rng.next_f32());
+            let seed = (u64::from(self.rng.next_u32()) << 32) | u64::from(self.rng.next_u32());
+            let sampler = sampler_for(group.seed, group.k, index, group.settings);
+            let fresh = Chain::start(&self.targets[j], sampler, Pcg32::new(seed, j as u64), group.k);
+            let rays = self.replicas[j].rays;
+            self.replicas[j] = fresh;
+            self.replicas[j].rays += rays;
+        }
     }
 
     /// Burn-in statistics are discarded with its splats.
@@ -243,9 +261,9 @@ impl Ensemble<'_> {
 }
 
 impl Walker for Ensemble<'_> {
-    fn run(&mut self, mutations: u64, splats: &mut SplatBuffer, stop: &dyn Fn() -> bool) -> u64 {
+    fn run(&mut self, mutations: u64, splats: &mut [SplatBuffer], stop: &dyn Fn() -> bool) -> u64 {
         if self.replicas.len() == 1 {
-            return self.replicas[0].run(&self.targets[0], mutations, Some(splats), stop);
+            return self.replicas[0].run(&self.targets[0], mutations, Some(&mut splats[0]), stop);
         }
         let start = std::time::Instant::now();
         let mut done = 0;
@@ -255,15 +273,19 @@ impl Walker for Ensemble<'_> {
             }
             let reuse = self.reuse.is_some();
             for (j, (chain, target)) in self.replicas.iter_mut().zip(&self.targets).enumerate() {
-                chain.mutate(target, if j == 0 && !reuse { Some(&mut *splats) } else { None });
+                chain.mutate(target, if j == 0 && !reuse { Some(&mut splats[0]) } else { None });
             }
-            self.swap();
+            self.sweeps += 1;
+            if self.sweeps.is_multiple_of(self.swap_every) {
+                self.swap();
+            }
             if let Some(reuse) = &self.reuse {
-                // Every replica's current state, weighted by the balance heuristic.
-                for chain in &mut self.replicas {
+                // Every replica's current state, weighted by the balance heuristic, into the
+                // replica's own layer (normalised by its own b_l).
+                for (chain, layer) in self.replicas.iter_mut().zip(splats.iter_mut()) {
                     let scale = reuse.scale(&self.targets, chain.state_mut());
                     if scale > 0.0 {
-                        chain.state().splat(splats, scale);
+                        chain.state().splat(layer, scale);
                     }
                 }
             }
@@ -284,17 +306,27 @@ impl Walker for Ensemble<'_> {
         stats
     }
 
-    fn large(&self) -> (f64, f64, u64) {
-        self.replicas[0].large
+    fn layers(&self) -> usize {
+        if self.reuse.is_some() { self.replicas.len() } else { 1 }
+    }
+
+    fn large(&self, layer: usize) -> Moments {
+        self.replicas[layer].large
+    }
+
+    fn calibration(&self) -> Option<(&[Moments], &[f64])> {
+        self.reuse.as_ref().map(|r| (r.bootstrap.as_slice(), r.ratios.as_slice()))
     }
 
     fn rays(&self) -> u64 {
         self.replicas.iter().map(|r| r.rays).sum()
     }
 
-    /// Tunes the depth's shared ladder, then (with reuse) calibrates the replicas' ratios.
+    /// Tunes the depth's shared ladder, values the depth's bootstrap under the frozen ladder,
+    /// restarts every replica from it in proportion to its own target and (with reuse)
+    /// calibrates the replicas' normalisations.
     fn prepare_group(ensembles: &mut [Self], group: &GroupContext, stop: &(dyn Fn() -> bool + Sync)) -> u64 {
-        if ensembles.is_empty() {
+        if ensembles.is_empty() || ensembles[0].replicas.len() < 2 {
             return 0;
         }
         if let Some(tuning) = ensembles[0].tuning.clone()
@@ -302,12 +334,21 @@ impl Walker for Ensemble<'_> {
         {
             return 0;
         }
-        let Some(samples) = ensembles[0].calibration else { return 0 };
-        let (reuse, rays) = Reuse::calibrate(&ensembles[0].targets, group, samples);
-        for e in ensembles.iter_mut() {
-            e.reuse = Some(reuse.clone());
-            e.calibration = None;
-        }
+        let k = ensembles[0].replicas.len();
+        let (calibration, rays) = Calibration::new(&ensembles[0].targets, group, ensembles[0].calibration_samples);
+        let starts: Vec<Option<Distribution1D>> = (0..k)
+            .map(|l| {
+                let values = calibration.of(l);
+                values.iter().any(|&v| v > 0.0).then(|| Distribution1D::new(&values))
+            })
+            .collect();
+        let reuse = ensembles[0].reuse_replicas.then(|| Reuse::new(&calibration, k));
+        ensembles.par_iter_mut().for_each(|e| {
+            e.restart(&starts, group);
+            e.tuning = None;
+            e.discard_statistics();
+            e.reuse.clone_from(&reuse);
+        });
         rays
     }
 }

@@ -61,6 +61,8 @@ pub struct TemperedIntegrator {
     /// Every replica contributes to the image (balance heuristic over the replicas' targets)
     /// instead of replica 0 alone (default: off; see the README for what was measured).
     pub reuse_replicas: bool,
+    /// Sweeps between swap steps (1: a swap step after every sweep).
+    pub swap_every: u64,
 }
 
 impl TemperedIntegrator {
@@ -78,6 +80,7 @@ impl TemperedIntegrator {
             burn_in: 500,
             swap_target: 0.234,
             reuse_replicas: false,
+            swap_every: 1,
         }
     }
 
@@ -136,7 +139,10 @@ impl ChainIntegrator for TemperedIntegrator {
                 rng: Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11),
                 swaps: SwapStats::new(ladder.len()),
                 cross_cache: Vec::new(),
-                calibration: (self.reuse_replicas && ladder.len() > 1).then_some(self.bootstrap),
+                calibration_samples: self.bootstrap,
+                reuse_replicas: self.reuse_replicas,
+                swap_every: self.swap_every.max(1),
+                sweeps: 0,
                 reuse: None,
                 tuning: (self.ladder.is_empty() && self.burn_in > 0 && ladder.len() > 1).then_some(Tuning {
                     sweeps: self.burn_in,

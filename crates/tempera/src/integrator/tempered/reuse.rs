@@ -4,35 +4,56 @@
 //! `N` of sweeps for every replica the multi-sample MIS estimator (Veach's balance heuristic)
 //! of the image is
 //!
-//! `I = (1/N) Σ_j Σ_n C_0(u_jn) / Σ_l f_l(u_jn)/b_l = (b_0/N) Σ_j Σ_n C_0(u_jn) / Σ_l f_l(u_jn)/ρ_l`
+//! `I = (1/N) Σ_j Σ_n C_0(u_jn) / Σ_l f_l(u_jn)/b_l`.
 //!
-//! with `ρ_l = b_l/b_0`, so a state splats `C_0/Σ_l f_l/ρ_l` and the driver's usual scale
-//! `b_0·N_pixels/M` (with the refined `b_0`) applies. The ratios are estimated per depth once
-//! the depth's shared ladder is frozen, from the depth's bootstrap samples (the same uniform
-//! primary samples that estimate `b_0`) evaluated again under replica 0's target and
-//! cross-evaluated (no rays) under the others: `ρ_l = Σ_i f_l(u_i) / Σ_i f_0(u_i)`. A wrong
-//! `ρ_l` scales replica `l`'s share of the estimate, which is why every bootstrap sample serves.
+//! The weights need only ratios: with any fixed `ρ_l > 0` standing in for `b_l/b_0`,
+//! `w_j = (f_j/ρ_j) / Σ_l f_l/ρ_l` still sums to one over the replicas, and
+//!
+//! `I = Σ_j (b_j/ρ_j) · (1/N) Σ_n C_0(u_jn) / Σ_l f_l(u_jn)/ρ_l`
+//!
+//! is unbiased whatever `ρ` is; a good `ρ` only lowers the variance. So a state of replica `j`
+//! splats `C_0/Σ_l f_l/ρ_l` into layer `j` of its depth, and the driver scales layer `j` by
+//! `b_j/ρ_j · N_pixels/M`, with `b_j` refined like MMLT's `b_k`: the mean of `f_j` over the
+//! depth's bootstrap and replica `j`'s large-step proposals (uniform samples, whichever
+//! replica slot they are made in). Each `b_j` enters the image linearly, so its estimation
+//! error averages out instead of biasing the image, as MMLT's `b_k` does. (Scaling every layer
+//! by the refined `b_0`, with the ratios from the bootstrap alone, makes the image depend on
+//! the bootstrap's `Σ f_l / Σ f_0` through the weights' normalisation, a bias that does not
+//! shrink with the render's length.)
+//!
+//! The estimator also assumes each replica's states follow its own target. Replicas that
+//! started from replica 0's distribution did not yet at short budgets, which brightened
+//! veach-ajar by 2.6 % at 10 s; every replica now restarts from the bootstrap in proportion to
+//! its own target once the ladder is frozen (see `Ensemble::restart`).
+//!
+//! The ratios are estimated per depth once the depth's shared ladder is frozen, from the
+//! depth's bootstrap samples (the same uniform primary samples that estimate `b_0`) evaluated
+//! again under replica 0's target and cross-evaluated (no rays) under the others:
+//! `ρ_l = Σ_i f_l(u_i) / Σ_i f_0(u_i)`; the same sums start the `b_l`.
 
-use crate::integrator::mmlt::{GroupContext, sampler_for};
+use crate::integrator::mmlt::{GroupContext, Moments, sampler_for};
 use crate::mcmc::{Paths, Target, TemperedState, TemperedTarget};
 use rayon::prelude::*;
 
-/// The replicas' normalisation ratios `ρ_l = b_l/b_0` of one depth.
+/// The replicas' normalisation ratios `ρ_l ≈ b_l/b_0` of one depth (the weights), and the
+/// moments of each replica's target over the depth's bootstrap.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Reuse {
     pub ratios: Vec<f64>,
+    pub bootstrap: Vec<Moments>,
 }
 
-impl Reuse {
-    /// Estimates the ratios from the first `samples` bootstrap samples of the group; returns
-    /// them with the rays traced. Sums are taken in sample order: the same at any thread count.
-    pub(in crate::integrator) fn calibrate(
-        targets: &[TemperedTarget],
-        group: &GroupContext,
-        samples: usize,
-    ) -> (Reuse, u64) {
-        let k = targets.len();
-        let values: Vec<(Vec<f64>, u64)> = (0..samples)
+/// The depth's bootstrap samples valued under every replica's target once the ladder is
+/// frozen: `values[i][l] = f_l(u_i)`.
+pub struct Calibration {
+    pub values: Vec<Vec<f32>>,
+}
+
+impl Calibration {
+    /// Evaluates the first `samples` bootstrap samples of the group under replica 0's target
+    /// and cross-evaluates them (no rays) under the others; returns them with the rays traced.
+    pub(in crate::integrator) fn new(targets: &[TemperedTarget], group: &GroupContext, samples: usize) -> (Self, u64) {
+        let evaluated: Vec<(Vec<f32>, u64)> = (0..samples)
             .into_par_iter()
             .map_init(
                 || (TemperedState::default(), Paths::default()),
@@ -40,24 +61,39 @@ impl Reuse {
                     let mut sampler = sampler_for(group.seed, group.k, i, group.settings);
                     let mut rays = 0;
                     targets[0].evaluate(&mut sampler, paths, &mut rays, state);
-                    // Every sample counts, also those replica 0 values at zero: a roughened
-                    // lobe can give them value under the other targets.
-                    (targets.iter().map(|t| f64::from(t.value_of(state))).collect(), rays)
+                    (targets.iter().map(|t| t.value_of(state)).collect(), rays)
                 },
             )
             .collect();
-        let mut sums = vec![0.0f64; k];
-        let mut rays = 0;
-        for (v, r) in &values {
-            rays += r;
-            for (sum, x) in sums.iter_mut().zip(v) {
-                *sum += x;
+        let rays = evaluated.iter().map(|e| e.1).sum();
+        (Self { values: evaluated.into_iter().map(|e| e.0).collect() }, rays)
+    }
+
+    /// Replica `l`'s values over the samples.
+    pub fn of(&self, l: usize) -> Vec<f32> {
+        self.values.iter().map(|v| v[l]).collect()
+    }
+}
+
+impl Reuse {
+    /// The ratios and bootstrap moments from the depth's calibration. Sums are taken in sample
+    /// order: the same at any thread count.
+    pub fn new(calibration: &Calibration, replicas: usize) -> Reuse {
+        let mut bootstrap: Vec<Moments> = vec![(0.0, 0.0, calibration.values.len() as u64); replicas];
+        for v in &calibration.values {
+            // Every sample counts, also those replica 0 values at zero: a roughened lobe can
+            // give them value under the other targets.
+            for (m, &x) in bootstrap.iter_mut().zip(v) {
+                let x = f64::from(x);
+                m.0 += x;
+                m.1 += x * x;
             }
         }
         // Without light in the samples (or for a replica that saw none) the ratios stay 1: the
         // weights remain a partition of unity, only less well balanced.
-        let ratios = sums.iter().map(|&s| if sums[0] > 0.0 && s > 0.0 { s / sums[0] } else { 1.0 }).collect();
-        (Reuse { ratios }, rays)
+        let s0 = bootstrap[0].0;
+        let ratios = bootstrap.iter().map(|&(s, ..)| if s0 > 0.0 && s > 0.0 { s / s0 } else { 1.0 }).collect();
+        Reuse { ratios, bootstrap }
     }
 
     /// The splat scale `1 / Σ_l f_l(u)/ρ_l` of `state` (0 where every target vanishes). The
