@@ -84,7 +84,8 @@ pub(super) trait Walker: Send {
     fn layers(&self) -> usize {
         1
     }
-    /// The moments of the large-step proposal values of the chains normalising `layer`.
+    /// The moments of `layer`'s target over the walker's large-step proposals (independent
+    /// uniform samples; an ensemble values every replica's under the layer's target).
     fn large(&self, layer: usize) -> Moments;
     /// With several layers: per layer, the moments of its target over the group's bootstrap
     /// (shared by the group's walkers) and the ratio `ρ_l` its splats were weighted with.

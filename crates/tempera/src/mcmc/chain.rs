@@ -100,9 +100,24 @@ impl<S: State> Chain<S> {
     /// (when `splats` is given), accept or reject. Not timed: callers that interleave chains
     /// (replica ensembles) time whole sweeps.
     pub fn mutate(&mut self, target: &impl Target<State = S>, splats: Option<&mut SplatBuffer>) {
+        self.mutate_observed(target, splats, |_| {});
+    }
+
+    /// [`Self::mutate`], showing each large-step proposal, once evaluated, to `observe`: a
+    /// large step is an independent uniform sample, which replica ensembles also value under
+    /// their other targets to refine those targets' normalisations.
+    pub fn mutate_observed(
+        &mut self,
+        target: &impl Target<State = S>,
+        splats: Option<&mut SplatBuffer>,
+        mut observe: impl FnMut(&mut S),
+    ) {
         self.sampler.start_iteration();
         let large = self.sampler.is_large_step();
         let invalid = target.evaluate(&mut self.sampler, &mut self.paths, &mut self.rays, &mut self.proposal);
+        if large {
+            observe(&mut self.proposal);
+        }
         let (proposal, current) = (&self.proposal, &self.current);
         let s = &mut self.stats;
         s.invalid += u64::from(invalid);

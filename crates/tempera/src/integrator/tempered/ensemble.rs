@@ -48,6 +48,9 @@ pub struct Ensemble<'a> {
     pub reuse_replicas: bool,
     /// All-replica reuse, once calibrated: the ratios every replica's splats are weighted with.
     pub reuse: Option<Reuse>,
+    /// Per target, the moments of its values over the large-step proposals of every replica
+    /// (each an independent uniform sample): target 0's always, the others' with reuse.
+    pub large: Vec<Moments>,
     /// A swap step after every `swap_every` sweeps; sweeps made since the render began.
     pub swap_every: u64,
     pub sweeps: u64,
@@ -257,6 +260,7 @@ impl Ensemble<'_> {
             chain.large = (0.0, 0.0, 0);
         }
         self.swaps = SwapStats::new(self.replicas.len());
+        self.large = vec![(0.0, 0.0, 0); self.replicas.len()];
     }
 }
 
@@ -272,8 +276,18 @@ impl Walker for Ensemble<'_> {
                 break;
             }
             let reuse = self.reuse.is_some();
-            for (j, (chain, target)) in self.replicas.iter_mut().zip(&self.targets).enumerate() {
-                chain.mutate(target, if j == 0 && !reuse { Some(&mut splats[0]) } else { None });
+            let (targets, large) = (&self.targets, &mut self.large);
+            let valued = if reuse { targets.len() } else { 1 };
+            for (j, (chain, target)) in self.replicas.iter_mut().zip(targets).enumerate() {
+                let splats = if j == 0 && !reuse { Some(&mut splats[0]) } else { None };
+                chain.mutate_observed(target, splats, |proposal| {
+                    for (l, (m, t)) in large.iter_mut().zip(targets).take(valued).enumerate() {
+                        let v = if l == j { proposal.value() } else { t.value_of(proposal) };
+                        // Invalid values count as zero, as in the chains themselves.
+                        let v = if v.is_finite() && v > 0.0 { f64::from(v) } else { 0.0 };
+                        *m = (m.0 + v, m.1 + v * v, m.2 + 1);
+                    }
+                });
             }
             self.sweeps += 1;
             if self.sweeps.is_multiple_of(self.swap_every) {
@@ -311,7 +325,7 @@ impl Walker for Ensemble<'_> {
     }
 
     fn large(&self, layer: usize) -> Moments {
-        self.replicas[layer].large
+        if self.replicas.len() == 1 { self.replicas[0].large } else { self.large[layer] }
     }
 
     fn calibration(&self) -> Option<(&[Moments], &[f64])> {

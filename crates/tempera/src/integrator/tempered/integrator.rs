@@ -141,6 +141,7 @@ impl ChainIntegrator for TemperedIntegrator {
                 cross_cache: Vec::new(),
                 calibration_samples: self.bootstrap,
                 reuse_replicas: self.reuse_replicas,
+                large: vec![(0.0, 0.0, 0); ladder.len()],
                 swap_every: self.swap_every.max(1),
                 sweeps: 0,
                 reuse: None,

@@ -291,6 +291,33 @@ mod integrator {
             assert!(run(1) == run(2), "{swap:?}: same image at any thread count");
         }
     }
+
+    /// `swap_every` spaces the swap steps: one per `n` sweeps of each ensemble.
+    #[test]
+    fn swap_steps_follow_the_swap_interval() {
+        let mut scene = crate::scenes::default_scene().build().unwrap();
+        scene.set_resolution(16, 16);
+        let cancel = AtomicBool::new(false);
+        let control = RenderControl::new(&cancel, &|_| {});
+        for every in [1, 4] {
+            let t = TemperedIntegrator {
+                bootstrap: 5_000,
+                chains: 8,
+                replicas: 3,
+                swap_every: every,
+                ..TemperedIntegrator::new(4)
+            };
+            let (_, report) = t.render_with_report(&scene, &settings(32, 1, 0), &control).unwrap();
+            for d in report.depths.iter().filter(|d| d.depth > 0 && d.mutations > 0) {
+                let steps = d.swaps.as_ref().unwrap().steps;
+                // Each of the depth's 8 ensembles rounds its own count down.
+                assert!(
+                    steps * every <= d.mutations && steps * every + 8 * every > d.mutations,
+                    "every {every}: {d:?}"
+                );
+            }
+        }
+    }
 }
 
 mod reuse {
