@@ -93,10 +93,10 @@ pub struct RenderArgs {
     #[arg(long, default_value = "original", value_parser = ["roughened", "original"])]
     pub tempered_mis: String,
     /// Tempered MMLT: every replica contributes to the image, weighted by the balance heuristic
-    /// over the replicas' normalised targets.
+    /// over the replicas' normalised targets (the default).
     #[arg(long, overrides_with = "no_reuse_replicas")]
     pub reuse_replicas: bool,
-    /// Tempered MMLT: replica 0 alone writes the image (the default).
+    /// Tempered MMLT: replica 0 alone writes the image (as in Šik & Křivánek 2016).
     #[arg(long, overrides_with = "reuse_replicas")]
     pub no_reuse_replicas: bool,
     /// Tempered MMLT: sweeps (one mutation per replica) between swap steps.

@@ -22,7 +22,8 @@
 //! proportion to its own target, as MMLT's chains start: the ensembles then begin in their
 //! stationary distribution, and no settling sweeps are needed. Statistics start afresh.
 
-use super::reuse::{Calibration, Reuse};
+use super::calibration::Calibration;
+use super::reuse::Reuse;
 use super::{CrossValues, SwapStrategy, swap_acceptance};
 use crate::film::SplatBuffer;
 use crate::integrator::mmlt::{GroupContext, Moments, Walker, sampler_for};
@@ -346,6 +347,11 @@ impl Walker for Ensemble<'_> {
         if let Some(tuning) = ensembles[0].tuning.clone()
             && !Self::tune_together(ensembles, tuning, stop)
         {
+            // Stopped during the burn-in: nothing of it may show in the statistics.
+            for e in ensembles.iter_mut() {
+                e.tuning = None;
+                e.discard_statistics();
+            }
             return 0;
         }
         let k = ensembles[0].replicas.len();

@@ -59,7 +59,8 @@ pub struct TemperedIntegrator {
     /// Neighbour-swap acceptance the tuning aims at.
     pub swap_target: f64,
     /// Every replica contributes to the image (balance heuristic over the replicas' targets)
-    /// instead of replica 0 alone (default: off; see the README for what was measured).
+    /// instead of replica 0 alone (default: on, which measured better on every scene tried;
+    /// see the README).
     pub reuse_replicas: bool,
     /// Sweeps between swap steps (1: a swap step after every sweep).
     pub swap_every: u64,
@@ -79,7 +80,7 @@ impl TemperedIntegrator {
             roughen_mis: false,
             burn_in: 500,
             swap_target: 0.234,
-            reuse_replicas: false,
+            reuse_replicas: true,
             swap_every: 1,
         }
     }

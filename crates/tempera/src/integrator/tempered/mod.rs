@@ -14,6 +14,7 @@
 //! - [`Permutation`]: a Gibbs step over all `K!` assignments of states to replicas, drawn with
 //!   probability proportional to `Π_i f_i(u_σ(i))` (always accepted).
 
+mod calibration;
 mod ensemble;
 mod equi_energy;
 mod integrator;

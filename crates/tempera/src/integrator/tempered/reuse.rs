@@ -31,9 +31,9 @@
 //! again under replica 0's target and cross-evaluated (no rays) under the others:
 //! `ρ_l = Σ_i f_l(u_i) / Σ_i f_0(u_i)`; the same sums start the `b_l`.
 
-use crate::integrator::mmlt::{GroupContext, Moments, sampler_for};
-use crate::mcmc::{Paths, Target, TemperedState, TemperedTarget};
-use rayon::prelude::*;
+use super::calibration::Calibration;
+use crate::integrator::mmlt::Moments;
+use crate::mcmc::{TemperedState, TemperedTarget};
 
 /// The replicas' normalisation ratios `ρ_l ≈ b_l/b_0` of one depth (the weights), and the
 /// moments of each replica's target over the depth's bootstrap.
@@ -41,38 +41,6 @@ use rayon::prelude::*;
 pub struct Reuse {
     pub ratios: Vec<f64>,
     pub bootstrap: Vec<Moments>,
-}
-
-/// The depth's bootstrap samples valued under every replica's target once the ladder is
-/// frozen: `values[i][l] = f_l(u_i)`.
-pub struct Calibration {
-    pub values: Vec<Vec<f32>>,
-}
-
-impl Calibration {
-    /// Evaluates the first `samples` bootstrap samples of the group under replica 0's target
-    /// and cross-evaluates them (no rays) under the others; returns them with the rays traced.
-    pub(in crate::integrator) fn new(targets: &[TemperedTarget], group: &GroupContext, samples: usize) -> (Self, u64) {
-        let evaluated: Vec<(Vec<f32>, u64)> = (0..samples)
-            .into_par_iter()
-            .map_init(
-                || (TemperedState::default(), Paths::default()),
-                |(state, paths), i| {
-                    let mut sampler = sampler_for(group.seed, group.k, i, group.settings);
-                    let mut rays = 0;
-                    targets[0].evaluate(&mut sampler, paths, &mut rays, state);
-                    (targets.iter().map(|t| t.value_of(state)).collect(), rays)
-                },
-            )
-            .collect();
-        let rays = evaluated.iter().map(|e| e.1).sum();
-        (Self { values: evaluated.into_iter().map(|e| e.0).collect() }, rays)
-    }
-
-    /// Replica `l`'s values over the samples.
-    pub fn of(&self, l: usize) -> Vec<f32> {
-        self.values.iter().map(|v| v[l]).collect()
-    }
 }
 
 impl Reuse {

@@ -241,8 +241,15 @@ mod integrator {
         let bdpt = render_with(&cornell, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
         let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
         for swap in [Swap::Neighbor, Swap::EquiEnergy, Swap::Permutation] {
-            let t =
-                TemperedIntegrator { bootstrap: 100_000, chains: 16, replicas: 3, swap, ..TemperedIntegrator::new(5) };
+            // Replica 0 alone writes the image here; the default scene below reuses every replica.
+            let t = TemperedIntegrator {
+                bootstrap: 100_000,
+                chains: 16,
+                replicas: 3,
+                swap,
+                reuse_replicas: false,
+                ..TemperedIntegrator::new(5)
+            };
             let (out, report) = t.render_with_report(&cornell, &settings(512, 2, 0), &control).unwrap();
             let (a, b) = (block_stats(&out.image, 16), block_stats(&bdpt.image, 16));
             assert!((mean(&a) / mean(&b) - 1.0).abs() < 0.01, "{swap:?}: image means {} vs {}", mean(&a), mean(&b));
