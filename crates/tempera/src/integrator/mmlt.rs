@@ -353,14 +353,21 @@ impl ChainSettings {
             })
             .collect();
         let stop = || control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d);
-        // Walkers of a group are contiguous in the plan.
-        let mut first = 0;
-        while first < chains.len() {
+        // Walkers of a group are contiguous in the plan; groups are prepared independently of
+        // each other, all at once (each group's result does not depend on the others').
+        let mut groups: Vec<(usize, &mut [W])> = Vec::new();
+        let (mut rest, mut first) = (chains.as_mut_slice(), 0);
+        while !rest.is_empty() {
             let k = plan[first].0;
-            let end = first + plan[first..].iter().take_while(|p| p.0 == k).count();
-            total_rays += W::prepare_group(&mut chains[first..end], &GroupContext { k, seed, settings: self }, &stop);
-            first = end;
+            let n = plan[first..].iter().take_while(|p| p.0 == k).count();
+            let (group, tail) = rest.split_at_mut(n);
+            groups.push((k, group));
+            (rest, first) = (tail, first + n);
         }
+        total_rays += groups
+            .into_par_iter()
+            .map(|(k, group)| W::prepare_group(group, &GroupContext { k, seed, settings: self }, &stop))
+            .sum::<u64>();
         let mut layers = vec![1; depths];
         for (chain, &(k, ..)) in chains.iter().zip(&plan) {
             layers[k] = layers[k].max(chain.layers());
