@@ -6,7 +6,7 @@ pub mod filter;
 pub mod splat;
 
 pub use filter::Filter;
-pub use splat::SplatBuffer;
+pub use splat::{SharedSplats, SplatBuffer};
 
 use crate::math::{Rgb, Vec2, is_valid_radiance};
 use crate::texture::Image;

@@ -1,9 +1,20 @@
-//! Splat buffers for contributions that land on arbitrary pixels (light tracing, MCMC). Values
-//! are accumulated in 64.64 fixed point (`i128`): integer addition is associative, so buffers
-//! filled by any number of threads in any order merge to a bit-identical image.
+//! Splat buffers for contributions that land on arbitrary pixels. Values are accumulated in
+//! fixed point: integer addition is associative and commutative, so the image does not depend
+//! on the order in which threads add to it.
+//!
+//! - [`SplatBuffer`] (light tracing): 64.64 fixed point (`i128`), one buffer per thread, merged;
+//!   any radiance fits.
+//! - [`SharedSplats`] (Markov chains): 40.24 fixed point in `AtomicI64`, one buffer that every
+//!   thread adds to, so memory does not grow with the thread count (the chain driver keeps one
+//!   buffer per path depth and, with all-replica reuse, per replica). Chain splats are bounded:
+//!   a state of value `f = luminance(C)` splats `C/f` times a weight of at most 1, at most
+//!   `1/0.0722` per channel, so the range of ±5.5·10¹¹ per pixel and channel holds more than
+//!   10¹⁰ splats on one pixel, and a resolution of 6·10⁻⁸ per splat is far below what the f32
+//!   image keeps.
 
 use crate::math::{Rgb, Vec2, is_valid_radiance};
 use crate::texture::Image;
+use std::sync::atomic::{AtomicI64, AtomicU64, Ordering};
 
 const SCALE: f64 = 18_446_744_073_709_551_616.0; // 2^64
 
@@ -69,9 +80,96 @@ impl SplatBuffer {
     }
 }
 
+const SHARED_SCALE: f64 = 16_777_216.0; // 2^24
+
+/// Largest value one splat may add per channel; larger ones are dropped as invalid (they
+/// cannot come from a chain, and could overflow the sums).
+const SHARED_MAX: f32 = 1.0e9;
+
+/// A splat buffer that threads add to concurrently (see the module documentation).
+#[derive(Debug)]
+pub struct SharedSplats {
+    pub width: u32,
+    pub height: u32,
+    sums: Vec<[AtomicI64; 3]>,
+    invalid: AtomicU64,
+}
+
+impl SharedSplats {
+    pub fn new(width: u32, height: u32) -> Self {
+        let sums = (0..width as usize * height as usize).map(|_| Default::default()).collect();
+        Self { width, height, sums, invalid: AtomicU64::new(0) }
+    }
+
+    /// Adds `l` to the pixel containing raster position `p` (box reconstruction).
+    #[inline]
+    pub fn add(&self, p: Vec2, l: Rgb) {
+        if !is_valid_radiance(l) || l.x > SHARED_MAX || l.y > SHARED_MAX || l.z > SHARED_MAX {
+            self.invalid.fetch_add(1, Ordering::Relaxed);
+            return;
+        }
+        let (x, y) = (p.x.floor(), p.y.floor());
+        if x < 0.0 || y < 0.0 || x >= self.width as f32 || y >= self.height as f32 {
+            return;
+        }
+        let s = &self.sums[y as usize * self.width as usize + x as usize];
+        for (sum, v) in s.iter().zip([l.x, l.y, l.z]) {
+            let v = (f64::from(v) * SHARED_SCALE).round() as i64;
+            if v != 0 {
+                sum.fetch_add(v, Ordering::Relaxed);
+            }
+        }
+    }
+
+    /// Splats dropped because their value was NaN, infinite, negative or out of range.
+    pub fn invalid(&self) -> u64 {
+        self.invalid.load(Ordering::Relaxed)
+    }
+
+    /// The accumulated image multiplied by `scale` (consistent once the adding threads have
+    /// finished, as between the chain driver's rounds).
+    pub fn image(&self, scale: f64) -> Image {
+        let pixels = self
+            .sums
+            .iter()
+            .map(|s| {
+                let c = |i: usize| (s[i].load(Ordering::Relaxed) as f64 / SHARED_SCALE * scale) as f32;
+                Rgb::new(c(0), c(1), c(2))
+            })
+            .collect();
+        Image::new(self.width as usize, self.height as usize, pixels)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shared_splats_from_many_threads_are_bit_identical_to_one() {
+        let values: Vec<(Vec2, Rgb)> = (0..20_000)
+            .map(|i| {
+                (Vec2::new((i % 7) as f32 + 0.5, (i % 3) as f32 + 0.5), Rgb::new(1.0, 0.5, 13.0) / (i as f32 + 1.0))
+            })
+            .collect();
+        let one = SharedSplats::new(7, 3);
+        values.iter().for_each(|&(p, l)| one.add(p, l));
+        let shared = SharedSplats::new(7, 3);
+        std::thread::scope(|scope| {
+            for part in values.chunks(1_000) {
+                let shared = &shared;
+                scope.spawn(move || part.iter().rev().for_each(|&(p, l)| shared.add(p, l)));
+            }
+        });
+        assert_eq!(one.image(1.0).pixels, shared.image(1.0).pixels);
+        let total: f64 = one.image(1.0).pixels.iter().map(|p| f64::from(p.z)).sum();
+        let want: f64 = values.iter().map(|v| f64::from(v.1.z)).sum();
+        assert!((total - want).abs() < 1e-5 * want, "{total} vs {want}");
+        one.add(Vec2::new(0.5, 0.5), Rgb::new(f32::NAN, 0.0, 0.0));
+        one.add(Vec2::new(0.5, 0.5), Rgb::new(0.0, 2e9, 0.0));
+        assert_eq!(one.invalid(), 2);
+        assert_eq!(one.image(1.0).pixels, shared.image(1.0).pixels, "dropped splats leave no trace");
+    }
 
     #[test]
     fn merging_in_any_order_is_bit_identical() {

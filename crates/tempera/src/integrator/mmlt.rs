@@ -6,10 +6,11 @@
 //! proposals and current states are splatted with expected values (`a` and `1 − a`, as `C/f`).
 //! `b_k` is refined with the large-step proposals, which are independent uniform samples, so the
 //! image brightness does not hinge on the bootstrap. Chains are the unit of parallel work and
-//! splat into per-thread fixed-point buffers: the image is bit-identical at any thread count.
+//! splat into fixed-point buffers shared by the threads (one per depth, and per replica when
+//! tempered replicas are reused): the image is bit-identical at any thread count.
 
 use super::{Budget, ChainIntegrator, RenderControl, RenderOutput, RenderSettings, RenderStats, SnapshotClock};
-use crate::film::SplatBuffer;
+use crate::film::SharedSplats;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::{Pcg32, hash};
 use crate::mcmc::{Chain, Contribution, DepthStats, Paths, State, Target, evaluate};
@@ -17,7 +18,6 @@ use crate::sampler::PssSampler;
 use crate::scene::Scene;
 use crate::texture::Image;
 use rayon::prelude::*;
-use std::sync::Mutex;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -76,8 +76,8 @@ pub(crate) type Moments = (f64, f64, u64);
 /// layer is MMLT's `b_k` with `ρ_0 = 1`.
 pub(super) trait Walker: Send {
     /// Makes up to `mutations` mutations of the main chain, splatting into `splats` (one
-    /// buffer per layer); returns how many were made.
-    fn run(&mut self, mutations: u64, splats: &mut [SplatBuffer], stop: &dyn Fn() -> bool) -> u64;
+    /// buffer per layer, shared with the group's other walkers); returns how many were made.
+    fn run(&mut self, mutations: u64, splats: &[SharedSplats], stop: &dyn Fn() -> bool) -> u64;
     /// The main chain's statistics (with swap statistics for ensembles).
     fn stats(&self) -> DepthStats;
     /// The layers this walker splats into (fixed once its group is prepared).
@@ -132,8 +132,8 @@ impl<T: Target + Send> Walker for Single<T>
 where
     T::State: Send,
 {
-    fn run(&mut self, mutations: u64, splats: &mut [SplatBuffer], stop: &dyn Fn() -> bool) -> u64 {
-        self.chain.run(&self.target, mutations, Some(&mut splats[0]), stop)
+    fn run(&mut self, mutations: u64, splats: &[SharedSplats], stop: &dyn Fn() -> bool) -> u64 {
+        self.chain.run(&self.target, mutations, Some(&splats[0]), stop)
     }
 
     fn stats(&self) -> DepthStats {
@@ -185,65 +185,6 @@ struct Bootstrap {
     mean: f64,
     sum2: f64,
     invalid: u64,
-}
-
-/// Per-thread splat buffers, one per layer of each group, locked once per walker run.
-struct ThreadSplats {
-    threads: Vec<Mutex<Vec<SplatBuffer>>>,
-    /// Index of each group's first layer; the last entry is the number of buffers.
-    offsets: Vec<usize>,
-    w: u32,
-    h: u32,
-}
-
-impl ThreadSplats {
-    fn new(threads: usize, layers: &[usize], w: u32, h: u32) -> Self {
-        let mut offsets = vec![0];
-        for &l in layers {
-            offsets.push(offsets.last().copied().unwrap_or(0) + l);
-        }
-        let n = offsets.last().copied().unwrap_or(0);
-        let threads = (0..threads).map(|_| Mutex::new(vec![SplatBuffer::new(w, h); n])).collect();
-        Self { threads, offsets, w, h }
-    }
-
-    fn with<R>(&self, group: usize, f: impl FnOnce(&mut [SplatBuffer]) -> R) -> R {
-        let index = rayon::current_thread_index().unwrap_or(0) % self.threads.len();
-        let mut guard = self.threads[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        f(&mut guard[self.offsets[group]..self.offsets[group + 1]])
-    }
-
-    /// Per group, per layer, the sums over the threads so far, leaving the buffers as they are.
-    fn snapshot(&self) -> Vec<Vec<SplatBuffer>> {
-        let mut out = vec![SplatBuffer::new(self.w, self.h); self.offsets.last().copied().unwrap_or(0)];
-        for buffer in &self.threads {
-            let buffer = buffer.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-            for (total, b) in out.iter_mut().zip(buffer.iter()) {
-                total.merge(b);
-            }
-        }
-        self.split(out)
-    }
-
-    fn merged(self) -> Vec<Vec<SplatBuffer>> {
-        let mut out = vec![SplatBuffer::new(self.w, self.h); self.offsets.last().copied().unwrap_or(0)];
-        for buffer in &self.threads {
-            let mut buffer = buffer.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-            for (total, b) in out.iter_mut().zip(buffer.drain(..)) {
-                total.merge(&b);
-            }
-        }
-        self.split(out)
-    }
-
-    fn split(&self, mut all: Vec<SplatBuffer>) -> Vec<Vec<SplatBuffer>> {
-        let mut groups = Vec::with_capacity(self.offsets.len() - 1);
-        for pair in self.offsets.windows(2).rev() {
-            groups.push(all.split_off(pair[0]));
-        }
-        groups.reverse();
-        groups
-    }
 }
 
 impl ChainSettings {
@@ -372,12 +313,14 @@ impl ChainSettings {
         for (chain, &(k, ..)) in chains.iter().zip(&plan) {
             layers[k] = layers[k].max(chain.layers());
         }
-        let splats = ThreadSplats::new(rayon::current_num_threads().max(1), &layers, w, h);
+        // One buffer per layer of each group, shared by the threads.
+        let splats: Vec<Vec<SharedSplats>> =
+            layers.iter().map(|&n| (0..n).map(|_| SharedSplats::new(w, h)).collect()).collect();
         let run_round = |chains: &mut [W], quota: &(dyn Fn(usize) -> u64 + Sync)| {
             chains.par_iter_mut().enumerate().for_each(|(i, chain)| {
                 let (k, ..) = plan[i];
                 let n = quota(i);
-                let done = splats.with(k, |buffers| chain.run(n, buffers, &stop));
+                let done = chain.run(n, &splats[k], &stop);
                 (control.on_progress)(done);
             });
         };
@@ -399,7 +342,7 @@ impl ChainSettings {
                         ((share(k) * pixels as f64 / n as f64).round() as u64).max(1)
                     });
                     if clock.due() && !control.cancel.load(Ordering::Relaxed) {
-                        let out = develop(&boots, &chains, &plan, &splats.snapshot(), pixels);
+                        let out = develop(&boots, &chains, &plan, &splats, pixels);
                         let seconds = start.elapsed().as_secs_f64();
                         let out = RenderOutput {
                             stats: RenderStats { rays: out.stats.rays + total_rays, seconds, ..out.stats },
@@ -410,7 +353,7 @@ impl ChainSettings {
                 }
             }
         }
-        let out = develop(&boots, &chains, &plan, &splats.merged(), pixels);
+        let out = develop(&boots, &chains, &plan, &splats, pixels);
         let out = RenderOutput {
             stats: RenderStats {
                 rays: out.stats.rays + total_rays,
@@ -436,7 +379,7 @@ fn develop<W: Walker>(
     boots: &[Bootstrap],
     chains: &[W],
     plan: &Plan,
-    per_group: &[Vec<SplatBuffer>],
+    per_group: &[Vec<SharedSplats>],
     pixels: u64,
 ) -> RenderOutput {
     let depths = boots.len();
@@ -473,7 +416,7 @@ fn develop<W: Walker>(
         d.bootstrap_samples = n_boot;
         d.large_step_samples = large[k][0].2;
         d.invalid += boot.invalid;
-        invalid += d.invalid + per_group[k].iter().map(|b| b.invalid).sum::<u64>();
+        invalid += d.invalid + per_group[k].iter().map(SharedSplats::invalid).sum::<u64>();
         if d.mutations == 0 {
             continue;
         }

@@ -5,7 +5,7 @@
 //! time-budgeted renders can advance all chains in rounds.
 
 use super::{DepthStats, Paths};
-use crate::film::SplatBuffer;
+use crate::film::SharedSplats;
 use crate::math::rng::Pcg32;
 use crate::sampler::PssSampler;
 
@@ -16,7 +16,7 @@ pub trait State: Default {
     /// The bidirectional technique the state chose, for the technique-change statistics.
     fn technique(&self) -> usize;
     /// Adds the state's contributions, each times `scale`, to the film.
-    fn splat(&self, splats: &mut SplatBuffer, scale: f32);
+    fn splat(&self, splats: &SharedSplats, scale: f32);
 }
 
 /// Evaluates the sampler's current state into `out`; returns whether its value was invalid
@@ -80,7 +80,7 @@ impl<S: State> Chain<S> {
         &mut self,
         target: &impl Target<State = S>,
         mutations: u64,
-        mut splats: Option<&mut SplatBuffer>,
+        splats: Option<&SharedSplats>,
         stop: &dyn Fn() -> bool,
     ) -> u64 {
         let start = std::time::Instant::now();
@@ -89,7 +89,7 @@ impl<S: State> Chain<S> {
             if done % 256 == 0 && stop() {
                 break;
             }
-            self.mutate(target, splats.as_deref_mut());
+            self.mutate(target, splats);
             done += 1;
         }
         self.stats.seconds += start.elapsed().as_secs_f64();
@@ -99,7 +99,7 @@ impl<S: State> Chain<S> {
     /// One mutation: propose, splat proposal and current state with their expected weights
     /// (when `splats` is given), accept or reject. Not timed: callers that interleave chains
     /// (replica ensembles) time whole sweeps.
-    pub fn mutate(&mut self, target: &impl Target<State = S>, splats: Option<&mut SplatBuffer>) {
+    pub fn mutate(&mut self, target: &impl Target<State = S>, splats: Option<&SharedSplats>) {
         self.mutate_observed(target, splats, |_| {});
     }
 
@@ -109,7 +109,7 @@ impl<S: State> Chain<S> {
     pub fn mutate_observed(
         &mut self,
         target: &impl Target<State = S>,
-        splats: Option<&mut SplatBuffer>,
+        splats: Option<&SharedSplats>,
         mut observe: impl FnMut(&mut S),
     ) {
         self.sampler.start_iteration();

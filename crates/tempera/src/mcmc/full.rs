@@ -7,7 +7,7 @@
 
 use super::{Paths, State};
 use crate::bidir::{Heuristic, Subpaths, camera_subpath, connect, light_subpath};
-use crate::film::SplatBuffer;
+use crate::film::SharedSplats;
 use crate::math::{Rgb, Vec2, luminance};
 use crate::sampler::{PssSampler, Sampler, Stream};
 use crate::scene::Scene;
@@ -28,7 +28,7 @@ impl State for FullContribution {
         0
     }
 
-    fn splat(&self, splats: &mut SplatBuffer, scale: f32) {
+    fn splat(&self, splats: &SharedSplats, scale: f32) {
         for &(raster, l) in &self.splats {
             splats.add(raster, l * scale);
         }

@@ -13,7 +13,7 @@ pub use stats::{DepthStats, SwapStats};
 pub use tempered::{TemperedState, TemperedTarget};
 
 use crate::bidir::{Connection, Heuristic, Subpaths, Vertex, camera_subpath_vertices, connect, light_subpath_vertices};
-use crate::film::SplatBuffer;
+use crate::film::SharedSplats;
 use crate::math::{Rgb, Vec2, luminance};
 use crate::sampler::{PssSampler, Sampler, Stream};
 use crate::scene::Scene;
@@ -43,7 +43,7 @@ impl State for Contribution {
         self.technique
     }
 
-    fn splat(&self, splats: &mut SplatBuffer, scale: f32) {
+    fn splat(&self, splats: &SharedSplats, scale: f32) {
         splats.add(self.raster, self.l * scale);
     }
 }

@@ -7,7 +7,7 @@
 
 use super::{Contribution, Evaluated, Paths, State, Target, evaluate_connection};
 use crate::bidir::{Subpaths, TemperScratch, Tempering, tempered};
-use crate::film::SplatBuffer;
+use crate::film::SharedSplats;
 use crate::sampler::PssSampler;
 use crate::scene::Scene;
 
@@ -35,7 +35,7 @@ impl State for TemperedState {
         self.contribution.technique
     }
 
-    fn splat(&self, splats: &mut SplatBuffer, scale: f32) {
+    fn splat(&self, splats: &SharedSplats, scale: f32) {
         self.contribution.splat(splats, scale);
     }
 }

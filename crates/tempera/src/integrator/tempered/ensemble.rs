@@ -25,7 +25,7 @@
 use super::calibration::Calibration;
 use super::reuse::Reuse;
 use super::{CrossValues, SwapStrategy, swap_acceptance};
-use crate::film::SplatBuffer;
+use crate::film::SharedSplats;
 use crate::integrator::mmlt::{GroupContext, Moments, Walker, sampler_for};
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
@@ -266,9 +266,9 @@ impl Ensemble<'_> {
 }
 
 impl Walker for Ensemble<'_> {
-    fn run(&mut self, mutations: u64, splats: &mut [SplatBuffer], stop: &dyn Fn() -> bool) -> u64 {
+    fn run(&mut self, mutations: u64, splats: &[SharedSplats], stop: &dyn Fn() -> bool) -> u64 {
         if self.replicas.len() == 1 {
-            return self.replicas[0].run(&self.targets[0], mutations, Some(&mut splats[0]), stop);
+            return self.replicas[0].run(&self.targets[0], mutations, Some(&splats[0]), stop);
         }
         let start = std::time::Instant::now();
         let mut done = 0;
@@ -280,7 +280,7 @@ impl Walker for Ensemble<'_> {
             let (targets, large) = (&self.targets, &mut self.large);
             let valued = if reuse { targets.len() } else { 1 };
             for (j, (chain, target)) in self.replicas.iter_mut().zip(targets).enumerate() {
-                let splats = if j == 0 && !reuse { Some(&mut splats[0]) } else { None };
+                let splats = if j == 0 && !reuse { Some(&splats[0]) } else { None };
                 chain.mutate_observed(target, splats, |proposal| {
                     for (l, (m, t)) in large.iter_mut().zip(targets).take(valued).enumerate() {
                         let v = if l == j { proposal.value() } else { t.value_of(proposal) };
@@ -297,7 +297,7 @@ impl Walker for Ensemble<'_> {
             if let Some(reuse) = &self.reuse {
                 // Every replica's current state, weighted by the balance heuristic, into the
                 // replica's own layer (normalised by its own b_l).
-                for (chain, layer) in self.replicas.iter_mut().zip(splats.iter_mut()) {
+                for (chain, layer) in self.replicas.iter_mut().zip(splats) {
                     let scale = reuse.scale(&self.targets, chain.state_mut());
                     if scale > 0.0 {
                         chain.state().splat(layer, scale);
