@@ -394,7 +394,7 @@ mod start {
 
     /// Hot replicas started where replica 0's target is large (instead of in proportion to
     /// their own, flatter targets) over-represent replica 0's modes for a while; with every
-    /// replica contributing, a short render is then too bright (by 2.6 % on veach-ajar at 10 s;
+    /// replica contributing, a short render is then too bright (by 3.6 % on veach-ajar at 10 s;
     /// 15 % here, where the chains are short and the ladder wide and untuned). Plain MMLT
     /// with these settings (64 mutations per pixel) lands 1.6 % below this BDPT reference.
     #[test]
