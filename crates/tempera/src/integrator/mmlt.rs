@@ -13,7 +13,7 @@ use super::{Budget, ChainIntegrator, RenderControl, RenderOutput, RenderSettings
 use crate::film::SharedSplats;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::{Pcg32, hash};
-use crate::mcmc::{Chain, Contribution, DepthStats, Paths, State, Target, evaluate};
+use crate::mcmc::{Chain, Contribution, DepthStats, Moments, Paths, State, Target, evaluate};
 use crate::sampler::PssSampler;
 use crate::scene::Scene;
 use crate::texture::Image;
@@ -63,9 +63,6 @@ pub(super) struct ChainSettings {
     pub sigma: f32,
     pub large_step_probability: f32,
 }
-
-/// Running sums `(Σv, Σv², n)` of a target's values over independent uniform samples.
-pub(crate) type Moments = (f64, f64, u64);
 
 /// A unit of parallel work of the chain driver: one chain (MMLT, PSSMLT) or one ensemble of
 /// replicas (tempered MMLT).
@@ -384,17 +381,17 @@ fn develop<W: Walker>(
 ) -> RenderOutput {
     let depths = boots.len();
     let mut stats: Vec<DepthStats> = (0..depths).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect();
-    let mut large: Vec<Vec<Moments>> = per_group.iter().map(|g| vec![(0.0, 0.0, 0); g.len()]).collect();
-    let mut calibration: Vec<Option<(Vec<Moments>, Vec<f64>)>> = vec![None; depths];
+    let mut large: Vec<Vec<Moments>> = per_group.iter().map(|g| vec![Moments::default(); g.len()]).collect();
+    // Shared by a group's walkers: the first one's serves.
+    let mut calibration: Vec<Option<(&[Moments], &[f64])>> = vec![None; depths];
     let mut rays = 0;
     for (chain, &(k, ..)) in chains.iter().zip(plan) {
         stats[k].merge(&chain.stats());
         for (l, sums) in large[k].iter_mut().enumerate() {
-            let m = chain.large(l);
-            *sums = (sums.0 + m.0, sums.1 + m.1, sums.2 + m.2);
+            sums.merge(&chain.large(l));
         }
         if calibration[k].is_none() {
-            calibration[k] = chain.calibration().map(|(m, r)| (m.to_vec(), r.to_vec()));
+            calibration[k] = chain.calibration();
         }
         rays += chain.rays();
     }
@@ -404,40 +401,40 @@ fn develop<W: Walker>(
     for (k, d) in stats.iter_mut().enumerate() {
         let boot = &boots[k];
         let n_boot = boot.values.len() as u64;
-        let layer0 = (boot.mean * n_boot as f64, boot.sum2, n_boot);
-        // Mean and relative standard error of a target from its bootstrap and large-step sums.
-        let refine = |prior: Moments, large: Moments| {
-            let (sum, sum2, n) = (prior.0 + large.0, prior.1 + large.1, prior.2 + large.2);
-            let b = if n > 0 { sum / n as f64 } else { 0.0 };
-            let var = if n > 1 { (sum2 / n as f64 - b * b).max(0.0) * n as f64 / (n - 1) as f64 } else { 0.0 };
-            (b, if b > 0.0 { (var / n as f64).sqrt() / b } else { 0.0 })
+        // A target's mean over its bootstrap and large-step samples.
+        let refine = |mut prior: Moments, large: &Moments| {
+            prior.merge(large);
+            prior.mean_and_rel_se()
         };
-        (d.b, d.b_rel_se) = refine(layer0, large[k][0]);
+        let layer0 = Moments { sum: boot.mean * n_boot as f64, sum2: boot.sum2, n: n_boot };
+        (d.b, d.b_rel_se) = refine(layer0, &large[k][0]);
         d.bootstrap_samples = n_boot;
-        d.large_step_samples = large[k][0].2;
+        d.large_step_samples = large[k][0].n;
         d.invalid += boot.invalid;
         invalid += d.invalid + per_group[k].iter().map(SharedSplats::invalid).sum::<u64>();
+        if let Some((_, ratios)) = calibration[k] {
+            d.replica_b_ratios = ratios.iter().map(|&r| r as f32).collect();
+        }
         if d.mutations == 0 {
             continue;
         }
         // Layer l estimates its share of the depth's image per mutation: N_pixels · b_l/ρ_l / M_k
         // (MMLT's N_pixels · b_k / M_k for one layer).
+        let mut layer_b = Vec::with_capacity(per_group[k].len());
         for (l, buffer) in per_group[k].iter().enumerate() {
-            let (b, ratio) = match (&calibration[k], l) {
+            let (b, ratio) = match (calibration[k], l) {
                 (_, 0) => (d.b, 1.0),
-                (Some((moments, ratios)), l) => (refine(moments[l], large[k][l]).0, ratios[l]),
+                (Some((moments, ratios)), l) => (refine(moments[l], &large[k][l]).0, ratios[l]),
                 (None, _) => continue,
             };
-            if l > 0 {
-                d.replica_b.push(b);
-            }
+            layer_b.push(b);
             let layer = buffer.image(b / ratio * pixels as f64 / d.mutations as f64);
             for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
                 *p += *q;
             }
         }
-        if !d.replica_b.is_empty() {
-            d.replica_b.insert(0, d.b);
+        if layer_b.len() > 1 {
+            d.replica_b = layer_b;
         }
     }
     let mutations: u64 = stats.iter().map(|d| d.mutations).sum();

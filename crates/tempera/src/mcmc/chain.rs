@@ -4,7 +4,7 @@
 //! that are NaN, infinite or negative count as zero. The chain keeps its state between calls, so
 //! time-budgeted renders can advance all chains in rounds.
 
-use super::{DepthStats, Paths};
+use super::{DepthStats, Moments, Paths};
 use crate::film::SharedSplats;
 use crate::math::rng::Pcg32;
 use crate::sampler::PssSampler;
@@ -33,8 +33,8 @@ pub struct Chain<S> {
     proposal: S,
     paths: Paths,
     pub stats: DepthStats,
-    /// Sum, sum of squares and count of the large-step proposals' values.
-    pub large: (f64, f64, u64),
+    /// The large-step proposals' values.
+    pub large: Moments,
     pub rays: u64,
 }
 
@@ -53,7 +53,7 @@ impl<S: State> Chain<S> {
             proposal: S::default(),
             paths,
             stats: DepthStats { depth, ..DepthStats::default() },
-            large: (0.0, 0.0, 0),
+            large: Moments::default(),
             rays,
         }
     }
@@ -122,8 +122,7 @@ impl<S: State> Chain<S> {
         let s = &mut self.stats;
         s.invalid += u64::from(invalid);
         if large {
-            let f = f64::from(proposal.value());
-            self.large = (self.large.0 + f, self.large.1 + f * f, self.large.2 + 1);
+            self.large.push(f64::from(proposal.value()));
             s.large_steps_proposed += 1;
         } else {
             s.small_steps_proposed += 1;

@@ -9,7 +9,7 @@ pub mod tempered;
 
 pub use chain::{Chain, State, Target};
 pub use full::{FullContribution, evaluate_full};
-pub use stats::{DepthStats, SwapStats};
+pub use stats::{DepthStats, Moments, SwapStats};
 pub use tempered::{TemperedState, TemperedTarget};
 
 use crate::bidir::{Connection, Heuristic, Subpaths, Vertex, camera_subpath_vertices, connect, light_subpath_vertices};

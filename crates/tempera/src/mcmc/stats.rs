@@ -26,8 +26,8 @@ pub struct DepthStats {
     pub ladder: Vec<f32>,
     pub ladder_ensembles: u64,
     pub swaps: Option<SwapStats>,
-    /// Tempered MMLT with all-replica reuse: the normalisation ratios `b_l/b_0` of the
-    /// replicas (mean over the ensembles, like the ladder); empty otherwise.
+    /// Tempered MMLT with all-replica reuse: the ratios `ρ_l ≈ b_l/b_0` the replicas' splats
+    /// are weighted with (shared by the depth's ensembles); empty otherwise.
     pub replica_b_ratios: Vec<f32>,
     /// Tempered MMLT with all-replica reuse: each replica's normalisation `b_l` refined with
     /// its large steps (the first is `b`); empty otherwise.
@@ -56,12 +56,6 @@ impl DepthStats {
             for (a, b) in self.ladder.iter_mut().zip(&o.ladder) {
                 *a = ((f64::from(*a) * n + f64::from(*b) * m) / (n + m)) as f32;
             }
-            if !o.replica_b_ratios.is_empty() {
-                self.replica_b_ratios.resize(o.replica_b_ratios.len(), 0.0);
-                for (a, b) in self.replica_b_ratios.iter_mut().zip(&o.replica_b_ratios) {
-                    *a = ((f64::from(*a) * n + f64::from(*b) * m) / (n + m)) as f32;
-                }
-            }
             self.ladder_ensembles += o.ladder_ensembles.max(1);
         }
     }
@@ -73,6 +67,37 @@ impl DepthStats {
         } else {
             (self.large_steps_accepted + self.small_steps_accepted) as f64 / proposed as f64
         }
+    }
+}
+
+/// Running sums of a target's values over independent uniform samples (the bootstrap, large
+/// steps): its mean is a normalisation `b`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Moments {
+    pub sum: f64,
+    pub sum2: f64,
+    pub n: u64,
+}
+
+impl Moments {
+    pub fn push(&mut self, v: f64) {
+        self.sum += v;
+        self.sum2 += v * v;
+        self.n += 1;
+    }
+
+    pub fn merge(&mut self, o: &Moments) {
+        self.sum += o.sum;
+        self.sum2 += o.sum2;
+        self.n += o.n;
+    }
+
+    /// The mean and its relative standard error (0 where undefined).
+    pub fn mean_and_rel_se(&self) -> (f64, f64) {
+        let n = self.n;
+        let b = if n > 0 { self.sum / n as f64 } else { 0.0 };
+        let var = if n > 1 { (self.sum2 / n as f64 - b * b).max(0.0) * n as f64 / (n - 1) as f64 } else { 0.0 };
+        (b, if b > 0.0 { (var / n as f64).sqrt() / b } else { 0.0 })
     }
 }
 

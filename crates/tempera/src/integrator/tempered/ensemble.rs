@@ -26,10 +26,10 @@ use super::calibration::Calibration;
 use super::reuse::Reuse;
 use super::{CrossValues, SwapStrategy, swap_acceptance};
 use crate::film::SharedSplats;
-use crate::integrator::mmlt::{GroupContext, Moments, Walker, sampler_for};
+use crate::integrator::mmlt::{GroupContext, Walker, sampler_for};
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
-use crate::mcmc::{Chain, DepthStats, State, SwapStats, TemperedState, TemperedTarget};
+use crate::mcmc::{Chain, DepthStats, Moments, State, SwapStats, TemperedState, TemperedTarget};
 use rayon::prelude::*;
 
 pub struct Ensemble<'a> {
@@ -258,10 +258,10 @@ impl Ensemble<'_> {
     fn discard_statistics(&mut self) {
         for chain in &mut self.replicas {
             chain.stats = DepthStats { depth: chain.stats.depth, ..DepthStats::default() };
-            chain.large = (0.0, 0.0, 0);
+            chain.large = Moments::default();
         }
         self.swaps = SwapStats::new(self.replicas.len());
-        self.large = vec![(0.0, 0.0, 0); self.replicas.len()];
+        self.large = vec![Moments::default(); self.replicas.len()];
     }
 }
 
@@ -285,8 +285,7 @@ impl Walker for Ensemble<'_> {
                     for (l, (m, t)) in large.iter_mut().zip(targets).take(valued).enumerate() {
                         let v = if l == j { proposal.value() } else { t.value_of(proposal) };
                         // Invalid values count as zero, as in the chains themselves.
-                        let v = if v.is_finite() && v > 0.0 { f64::from(v) } else { 0.0 };
-                        *m = (m.0 + v, m.1 + v * v, m.2 + 1);
+                        m.push(if v.is_finite() && v > 0.0 { f64::from(v) } else { 0.0 });
                     }
                 });
             }
@@ -315,8 +314,6 @@ impl Walker for Ensemble<'_> {
         let mut stats = self.replicas[0].stats.clone();
         stats.ladder = self.targets.iter().map(|t| t.temper.a).collect();
         stats.ladder_ensembles = 1;
-        stats.replica_b_ratios =
-            self.reuse.as_ref().map_or_else(Vec::new, |r| r.ratios.iter().map(|&x| x as f32).collect());
         stats.swaps = (self.replicas.len() > 1).then(|| self.swaps.clone());
         stats
     }

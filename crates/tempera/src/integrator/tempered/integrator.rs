@@ -8,7 +8,7 @@ use crate::bidir::{Heuristic, Tempering};
 use crate::integrator::mmlt::{ChainSettings, MmltReport, StartContext, sampler_for};
 use crate::integrator::{ChainIntegrator, RenderControl, RenderOutput, RenderSettings};
 use crate::math::rng::{Pcg32, hash};
-use crate::mcmc::{Chain, SwapStats, TemperedTarget};
+use crate::mcmc::{Chain, Moments, SwapStats, TemperedTarget};
 use crate::scene::Scene;
 
 /// Which swap strategy the ensembles use.
@@ -142,7 +142,7 @@ impl ChainIntegrator for TemperedIntegrator {
                 cross_cache: Vec::new(),
                 calibration_samples: self.bootstrap,
                 reuse_replicas: self.reuse_replicas,
-                large: vec![(0.0, 0.0, 0); ladder.len()],
+                large: vec![Moments::default(); ladder.len()],
                 swap_every: self.swap_every.max(1),
                 sweeps: 0,
                 reuse: None,

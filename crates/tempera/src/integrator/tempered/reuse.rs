@@ -32,8 +32,7 @@
 //! `ρ_l = Σ_i f_l(u_i) / Σ_i f_0(u_i)`; the same sums start the `b_l`.
 
 use super::calibration::Calibration;
-use crate::integrator::mmlt::Moments;
-use crate::mcmc::{TemperedState, TemperedTarget};
+use crate::mcmc::{Moments, TemperedState, TemperedTarget};
 
 /// The replicas' normalisation ratios `ρ_l ≈ b_l/b_0` of one depth (the weights), and the
 /// moments of each replica's target over the depth's bootstrap.
@@ -47,20 +46,18 @@ impl Reuse {
     /// The ratios and bootstrap moments from the depth's calibration. Sums are taken in sample
     /// order: the same at any thread count.
     pub fn new(calibration: &Calibration, replicas: usize) -> Reuse {
-        let mut bootstrap: Vec<Moments> = vec![(0.0, 0.0, calibration.values.len() as u64); replicas];
+        let mut bootstrap = vec![Moments::default(); replicas];
         for v in &calibration.values {
             // Every sample counts, also those replica 0 values at zero: a roughened lobe can
             // give them value under the other targets.
             for (m, &x) in bootstrap.iter_mut().zip(v) {
-                let x = f64::from(x);
-                m.0 += x;
-                m.1 += x * x;
+                m.push(f64::from(x));
             }
         }
         // Without light in the samples (or for a replica that saw none) the ratios stay 1: the
         // weights remain a partition of unity, only less well balanced.
-        let s0 = bootstrap[0].0;
-        let ratios = bootstrap.iter().map(|&(s, ..)| if s0 > 0.0 && s > 0.0 { s / s0 } else { 1.0 }).collect();
+        let s0 = bootstrap[0].sum;
+        let ratios = bootstrap.iter().map(|m| if s0 > 0.0 && m.sum > 0.0 { m.sum / s0 } else { 1.0 }).collect();
         Reuse { ratios, bootstrap }
     }
 
