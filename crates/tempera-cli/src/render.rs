@@ -302,7 +302,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let on_progress = |n: u64| advance(&bar, budget, start, n);
     install_interrupt_handler();
     let control = RenderControl::new(&CANCEL, &on_progress);
-    let out = integrator.try_render(&scene, &settings, &control).map_err(anyhow::Error::msg)?;
+    let out = integrator.render(&scene, &settings, &control).map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
 
     let options = WriteOptions { exposure: args.exposure };

@@ -71,11 +71,9 @@ fn full_fixture_loads_every_directive_family() {
     let control = RenderControl::new(&cancel, &|_| {});
     let mut scene = scene;
     scene.set_resolution(16, 12);
-    let out = PathIntegrator::new(5).render(
-        &scene,
-        &RenderSettings { budget: Budget::Samples(2), seed: 1, threads: 1 },
-        &control,
-    );
+    let out = PathIntegrator::new(5)
+        .render(&scene, &RenderSettings { budget: Budget::Samples(2), seed: 1, threads: 1 }, &control)
+        .expect("the scene renders");
     assert!(out.image.pixels.iter().all(|p| p.is_finite()));
     assert!(out.image.pixels.iter().any(|p| p.max_element() > 0.0));
 }

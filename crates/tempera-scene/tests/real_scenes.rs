@@ -23,7 +23,7 @@ fn render(scene: &Scene, max_depth: u32, spp: u32) -> Image {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     let settings = RenderSettings { budget: Budget::Samples(spp), seed: 7, threads: 0 };
-    PathIntegrator::new(max_depth).render(scene, &settings, &control).image
+    PathIntegrator::new(max_depth).render(scene, &settings, &control).expect("the scene renders").image
 }
 
 #[test]

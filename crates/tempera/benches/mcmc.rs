@@ -25,7 +25,7 @@ fn render(integrator: &dyn Integrator, threads: usize) {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     let settings = RenderSettings { budget: Budget::Samples(MPP), seed: 1, threads };
-    let out = integrator.render(&SCENE, &settings, &control);
+    let out = integrator.render(&SCENE, &settings, &control).expect("the scene renders");
     divan::black_box(out.image);
 }
 

@@ -20,7 +20,7 @@ fn render(threads: usize) {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     let settings = RenderSettings { budget: Budget::Samples(1), seed: 1, threads };
-    let out = PathIntegrator::new(8).render(&SCENE, &settings, &control);
+    let out = PathIntegrator::new(8).render(&SCENE, &settings, &control).expect("the scene renders");
     divan::black_box(out.image);
 }
 

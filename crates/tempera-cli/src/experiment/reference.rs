@@ -141,7 +141,7 @@ fn render(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Referen
     let on_progress = |n: u64| crate::render::advance(&bar, budget, start, n);
     let control = RenderControl::new(&CANCEL, &on_progress);
     let settings = RenderSettings { budget, seed: r.seed.unwrap_or(DEFAULT_SEED), threads: config.threads };
-    let out = integrator.try_render(&scene.scene, &settings, &control).map_err(anyhow::Error::msg);
+    let out = integrator.render(&scene.scene, &settings, &control).map_err(anyhow::Error::msg);
     bar.finish_and_clear();
     let out = out.with_context(|| format!("scene '{}': reference", scene.entry.name))?;
     if out.stats.cancelled {

@@ -242,7 +242,7 @@ impl Job<'_> {
         let control = RenderControl::new(&CANCEL, &on_progress).with_snapshots(&snapshot_times, &on_snapshot);
         let settings = RenderSettings { budget, seed: self.seed, threads: self.config.threads };
         let integrator = self.method.integrator.as_ref();
-        let out = integrator.try_render(&self.scene.scene, &settings, &control).map_err(anyhow::Error::msg);
+        let out = integrator.render(&self.scene.scene, &settings, &control).map_err(anyhow::Error::msg);
         bar.finish_and_clear();
         let out = out.with_context(|| label.to_owned())?;
         if out.stats.cancelled {

@@ -6,12 +6,11 @@
 
 use super::tiles::{PixelEstimator, SampleCtx, render_tiles};
 use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
-use crate::bidir::{Heuristic, Subpaths, Vertex, camera_subpath, connect, light_subpath};
+use crate::bidir::{Heuristic, camera_subpath, connect, light_subpath};
 use crate::geometry::Ray;
 use crate::math::Rgb;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
-use std::cell::RefCell;
 
 /// Which strategies contribute.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -73,11 +72,6 @@ impl BdptIntegrator {
     }
 }
 
-thread_local! {
-    /// Reused subpath storage, one pair per worker thread.
-    static PATHS: RefCell<(Vec<Vertex>, Vec<Vertex>)> = const { RefCell::new((Vec::new(), Vec::new())) };
-}
-
 impl PixelEstimator for BdptIntegrator {
     const SPLATS: bool = true;
 
@@ -86,39 +80,37 @@ impl PixelEstimator for BdptIntegrator {
     }
 
     fn li<S: Sampler>(&self, scene: &Scene, ray: Ray, sampler: &mut S, ctx: &mut SampleCtx) -> Rgb {
-        PATHS.with_borrow_mut(|(camera, light)| {
-            camera_subpath(scene, ray, sampler, self.max_depth, camera, &mut ctx.rays);
-            light_subpath(scene, sampler, self.max_depth, light, &mut ctx.rays);
-            let mut l = Rgb::ZERO;
-            for t in 1..=camera.len() {
-                for s in 0..=light.len() {
-                    let depth = (s + t) as i64 - 2;
-                    if (s == 1 && t == 1) || depth < 0 || depth > i64::from(self.max_depth) || !self.included(s, t) {
-                        continue;
+        let paths = &mut *ctx.paths;
+        camera_subpath(scene, ray, sampler, self.max_depth, &mut paths.camera, &mut ctx.rays);
+        light_subpath(scene, sampler, self.max_depth, &mut paths.light, &mut ctx.rays);
+        let mut l = Rgb::ZERO;
+        for t in 1..=paths.camera.len() {
+            for s in 0..=paths.light.len() {
+                let depth = (s + t) as i64 - 2;
+                if (s == 1 && t == 1) || depth < 0 || depth > i64::from(self.max_depth) || !self.included(s, t) {
+                    continue;
+                }
+                let Some(c) = connect(scene, paths.subpaths(), (s, t), sampler, self.heuristic, &mut ctx.rays) else {
+                    continue;
+                };
+                let w = if self.strategies == Strategies::All { c.weight } else { 1.0 };
+                let v = c.l * w;
+                let raster = match (t, c.raster) {
+                    (1, Some(raster)) => {
+                        ctx.splats.add(raster, v);
+                        raster
                     }
-                    let paths = Subpaths { light, camera };
-                    let Some(c) = connect(scene, paths, (s, t), sampler, self.heuristic, &mut ctx.rays) else {
-                        continue;
-                    };
-                    let w = if self.strategies == Strategies::All { c.weight } else { 1.0 };
-                    let v = c.l * w;
-                    let raster = match (t, c.raster) {
-                        (1, Some(raster)) => {
-                            ctx.splats.add(raster, v);
-                            raster
-                        }
-                        _ => {
-                            l += v;
-                            ctx.raster
-                        }
-                    };
-                    if self.strategy_images {
-                        ctx.layers[strategy_index(s, t)].add(raster, v);
+                    _ => {
+                        l += v;
+                        ctx.raster
                     }
+                };
+                if self.strategy_images {
+                    ctx.layers[strategy_index(s, t)].add(raster, v);
                 }
             }
-            l
-        })
+        }
+        l
     }
 }
 
@@ -134,8 +126,13 @@ impl Integrator for BdptIntegrator {
         strategy_list(self.max_depth).into_iter().map(|(s, t)| format!("s{s}_t{t}")).collect()
     }
 
-    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
-        render_tiles(self, scene, settings, control)
+    fn render(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> Result<RenderOutput, String> {
+        Ok(render_tiles(self, scene, settings, control))
     }
 }
 

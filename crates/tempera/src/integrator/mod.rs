@@ -6,6 +6,7 @@ pub mod bdpt;
 pub mod mmlt;
 pub mod path;
 pub mod pssmlt;
+pub(crate) mod render_loop;
 pub mod tempered;
 pub mod tiles;
 
@@ -13,7 +14,7 @@ pub mod tiles;
 mod tests;
 
 pub use bdpt::{BdptIntegrator, Strategies};
-pub use mmlt::{MmltIntegrator, MmltReport};
+pub use mmlt::MmltIntegrator;
 pub use path::PathIntegrator;
 pub use pssmlt::PssmltIntegrator;
 pub use tempered::{Swap, TemperedIntegrator};
@@ -69,41 +70,6 @@ impl<'a> RenderControl<'a> {
     }
 }
 
-/// When the next snapshot of a time-budget render is due.
-pub(crate) struct SnapshotClock<'a> {
-    start: std::time::Instant,
-    times: &'a [Duration],
-    next: usize,
-}
-
-impl<'a> SnapshotClock<'a> {
-    /// Snapshots only make sense (and are only taken) under a time budget.
-    pub(crate) fn new(start: std::time::Instant, control: &'a RenderControl, budget: Budget) -> Self {
-        let times = if matches!(budget, Budget::Time(_)) { control.snapshots } else { &[] };
-        Self { start, times, next: 0 }
-    }
-
-    /// The instant the next snapshot is due, if any is left.
-    pub(crate) fn next_due(&self) -> Option<std::time::Instant> {
-        self.times.get(self.next).map(|&t| self.start + t)
-    }
-
-    /// True when a snapshot is due now.
-    pub(crate) fn due(&self) -> bool {
-        self.next_due().is_some_and(|d| std::time::Instant::now() >= d)
-    }
-
-    /// Hands `output` to the control as every snapshot that is due now (several when one step
-    /// of the render outlasted more than one requested time).
-    pub(crate) fn deliver(&mut self, control: &RenderControl, output: &RenderOutput) {
-        let elapsed = self.start.elapsed();
-        while self.next < self.times.len() && self.times[self.next] <= elapsed {
-            (control.on_snapshot)(self.next, output);
-            self.next += 1;
-        }
-    }
-}
-
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderStats {
     /// Samples per pixel that every pixel received.
@@ -127,19 +93,6 @@ pub struct RenderOutput {
     pub chains: Vec<crate::mcmc::DepthStats>,
 }
 
-impl RenderOutput {
-    /// A black image of the scene's film size with empty statistics: what `render` returns
-    /// when a render cannot be made (`try_render` says why).
-    pub fn black(scene: &Scene) -> Self {
-        RenderOutput {
-            image: Image::filled(scene.film.width as usize, scene.film.height as usize, crate::math::Rgb::ZERO),
-            stats: RenderStats::default(),
-            layers: Vec::new(),
-            chains: Vec::new(),
-        }
-    }
-}
-
 /// A light-transport algorithm.
 pub trait Integrator: Send + Sync {
     fn name(&self) -> &'static str;
@@ -147,48 +100,10 @@ pub trait Integrator: Send + Sync {
     fn layer_names(&self) -> Vec<String> {
         Vec::new()
     }
-    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput;
-    /// Like [`Self::render`], but reports why a render could not be made (for example an MCMC
-    /// bootstrap in which no light path reaches the camera).
-    fn try_render(
-        &self,
-        scene: &Scene,
-        settings: &RenderSettings,
-        control: &RenderControl,
-    ) -> Result<RenderOutput, String> {
-        Ok(self.render(scene, settings, control))
-    }
-}
-
-/// A Markov-chain integrator: it reports per-depth chain statistics and can refuse to render
-/// (no light path reaches the camera). Every one is an [`Integrator`].
-pub trait ChainIntegrator: Send + Sync {
-    fn name(&self) -> &'static str;
-    fn render_with_report(
-        &self,
-        scene: &Scene,
-        settings: &RenderSettings,
-        control: &RenderControl,
-    ) -> Result<(RenderOutput, MmltReport), String>;
-}
-
-impl<T: ChainIntegrator> Integrator for T {
-    fn name(&self) -> &'static str {
-        ChainIntegrator::name(self)
-    }
-
-    fn try_render(
-        &self,
-        scene: &Scene,
-        settings: &RenderSettings,
-        control: &RenderControl,
-    ) -> Result<RenderOutput, String> {
-        self.render_with_report(scene, settings, control).map(|(out, _)| out)
-    }
-
-    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
-        self.try_render(scene, settings, control).unwrap_or_else(|_| RenderOutput::black(scene))
-    }
+    /// Renders `scene`, or says why it cannot be rendered (for example an MCMC bootstrap in
+    /// which no light path reaches the camera).
+    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl)
+    -> Result<RenderOutput, String>;
 }
 
 /// Names accepted by [`create`].

@@ -151,7 +151,12 @@ impl Integrator for PathIntegrator {
         "path"
     }
 
-    fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
-        render_tiles(self, scene, settings, control)
+    fn render(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+    ) -> Result<RenderOutput, String> {
+        Ok(render_tiles(self, scene, settings, control))
     }
 }

@@ -5,10 +5,8 @@
 //! splatting, `b` refined with large steps, budgets, determinism) is MMLT's with a single group;
 //! the per-group statistics therefore have one row, covering every depth.
 
-use super::mmlt::{ChainSettings, MmltReport};
-use super::{ChainIntegrator, RenderControl, RenderOutput, RenderSettings};
-use crate::mcmc::{FullContribution, Paths, Target, evaluate_full};
-use crate::sampler::PssSampler;
+use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
+use crate::mcmc::{ChainSettings, EvalContext, FullContribution, Single, Target, evaluate_full};
 use crate::scene::Scene;
 
 #[derive(Clone, Copy, Debug)]
@@ -36,36 +34,29 @@ struct FullTarget<'a> {
 impl Target for FullTarget<'_> {
     type State = FullContribution;
 
-    fn evaluate(
-        &self,
-        sampler: &mut PssSampler,
-        paths: &mut Paths,
-        rays: &mut u64,
-        out: &mut FullContribution,
-    ) -> bool {
-        evaluate_full(self.scene, self.max_depth, sampler, paths, rays, out)
+    fn evaluate(&self, cx: &mut EvalContext, recycled: FullContribution) -> FullContribution {
+        evaluate_full(self.scene, self.max_depth, cx, recycled)
     }
 }
 
-impl ChainIntegrator for PssmltIntegrator {
+impl Integrator for PssmltIntegrator {
     fn name(&self) -> &'static str {
         "pssmlt"
     }
 
     /// Renders; the statistics have one row, covering every depth.
-    fn render_with_report(
+    fn render(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
         control: &RenderControl,
-    ) -> Result<(RenderOutput, MmltReport), String> {
+    ) -> Result<RenderOutput, String> {
         let chain = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
         let target = |_| FullTarget { scene, max_depth: self.max_depth };
-        let (mut out, mut report) =
-            chain.render(scene, settings, control, 1, target, |cx| chain.start_single(cx, target(0)))?;
-        for d in out.chains.iter_mut().chain(&mut report.depths) {
+        let mut out = chain.render(scene, settings, control, 1, target, |cx| Single::start(cx, target(0)))?;
+        for d in &mut out.chains {
             d.all_depths = true;
         }
-        Ok((out, report))
+        Ok(out)
     }
 }

@@ -16,7 +16,7 @@ pub(crate) fn render_with(
 ) -> RenderOutput {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
-    integrator.render(scene, &RenderSettings { budget, seed, threads }, &control)
+    integrator.render(scene, &RenderSettings { budget, seed, threads }, &control).expect("the scene renders")
 }
 
 /// Mean and standard error of the mean of a set of independent per-pixel estimates.
@@ -134,7 +134,7 @@ fn time_budget_renders_every_pixel_and_cancellation_stops_early() {
     };
     let control = RenderControl::new(&cancel, &on_progress);
     let settings = RenderSettings { budget: Budget::Samples(1 << 20), seed: 1, threads: 2 };
-    let out = integrator.render(&scene, &settings, &control);
+    let out = integrator.render(&scene, &settings, &control).unwrap();
     assert!(out.stats.cancelled);
     assert!(out.stats.pixel_samples < 32 * 32 * 64, "stopped long before the budget");
     assert!(out.image.pixels.iter().all(|p| p.is_finite()));
@@ -301,32 +301,32 @@ fn strategy_images_sum_to_the_bdpt_image() {
     assert!(light_tracing.pixels.iter().any(|p| p.max_element() > 0.0), "light tracing contributes");
 }
 
-fn mmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> (RenderOutput, MmltReport) {
+fn mmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> RenderOutput {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     let m = MmltIntegrator { bootstrap: 200_000, ..MmltIntegrator::new(5) };
-    m.render_with_report(scene, &RenderSettings { budget: Budget::Samples(mpp), seed, threads }, &control).unwrap()
+    m.render(scene, &RenderSettings { budget: Budget::Samples(mpp), seed, threads }, &control).unwrap()
 }
 
 #[test]
 fn mmlt_agrees_with_bdpt_on_a_cornell_box() {
     let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
     let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
-    let (mmlt, report) = mmlt_render(&scene, 2048, 2, 0);
+    let mmlt = mmlt_render(&scene, 2048, 2, 0);
     let (a, b) = (block_stats(&mmlt.image, 16), block_stats(&bdpt.image, 16));
     let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
     assert!((mean(&a) / mean(&b) - 1.0).abs() < 0.01, "image means {} vs {}", mean(&a), mean(&b));
     for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
         assert!((ma - mb).abs() < 4.0 * sb + 0.03 * mb, "block {i}: mmlt {ma} vs bdpt {mb} ± {sb}");
     }
-    assert!(report.depths.iter().all(|d| d.invalid == 0));
-    assert!(report.depths[1].b_rel_se < 0.02, "b_1 is pinned down: {:?}", report.depths[1]);
+    assert!(mmlt.chains.iter().all(|d| d.invalid == 0));
+    assert!(mmlt.chains[1].b_rel_se < 0.02, "b_1 is pinned down: {:?}", mmlt.chains[1]);
 }
 
 #[test]
 fn mmlt_passes_the_white_furnace() {
     let scene = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
-    let (out, _) = mmlt_render(&scene, 512, 3, 0);
+    let out = mmlt_render(&scene, 512, 3, 0);
     let (sphere, sky) = classify_furnace_pixels(&scene);
     let mean = |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
     assert!((mean(&sphere) - 0.8).abs() < 0.01, "sphere {}", mean(&sphere));
@@ -340,7 +340,10 @@ fn mmlt_is_bit_identical_at_any_thread_count() {
     let control = RenderControl::new(&cancel, &|_| {});
     let m = MmltIntegrator { bootstrap: 5_000, chains: 8, ..MmltIntegrator::new(4) };
     let run = |threads| {
-        m.render(&scene, &RenderSettings { budget: Budget::Samples(16), seed: 9, threads }, &control).image.pixels
+        m.render(&scene, &RenderSettings { budget: Budget::Samples(16), seed: 9, threads }, &control)
+            .unwrap()
+            .image
+            .pixels
     };
     let one = run(1);
     assert!(one == run(2) && one == run(3));
@@ -372,10 +375,8 @@ fn mmlt_without_light_reaching_the_camera_is_a_clear_error() {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     let m = MmltIntegrator { bootstrap: 1000, ..MmltIntegrator::new(3) };
-    let err = m
-        .try_render(&scene, &RenderSettings { budget: Budget::Samples(4), seed: 1, threads: 0 }, &control)
-        .err()
-        .unwrap();
+    let err =
+        m.render(&scene, &RenderSettings { budget: Budget::Samples(4), seed: 1, threads: 0 }, &control).err().unwrap();
     assert!(err.contains("no light path reaches the camera"), "{err}");
 }
 
@@ -386,13 +387,12 @@ fn mmlt_time_budget_advances_every_depth() {
     let control = RenderControl::new(&cancel, &|_| {});
     let m = MmltIntegrator { bootstrap: 20_000, chains: 8, ..MmltIntegrator::new(4) };
     let budget = Budget::Time(std::time::Duration::from_millis(400));
-    let (out, report) =
-        m.render_with_report(&scene, &RenderSettings { budget, seed: 4, threads: 0 }, &control).unwrap();
+    let out = m.render(&scene, &RenderSettings { budget, seed: 4, threads: 0 }, &control).unwrap();
     assert!(out.stats.seconds < 5.0);
     // Every depth got mutations in proportion to b_k (within rounding of one round).
-    let total: u64 = report.depths.iter().map(|d| d.mutations).sum();
-    let b_total: f64 = report.depths.iter().map(|d| d.b).sum();
-    for d in &report.depths {
+    let total: u64 = out.chains.iter().map(|d| d.mutations).sum();
+    let b_total: f64 = out.chains.iter().map(|d| d.b).sum();
+    for d in &out.chains {
         assert!(d.mutations > 0, "depth {} starved", d.depth);
         let share = d.mutations as f64 / total as f64;
         assert!((share - d.b / b_total).abs() < 0.05, "depth {}: share {share} vs {}", d.depth, d.b / b_total);
@@ -403,33 +403,33 @@ fn mmlt_time_budget_advances_every_depth() {
     assert!((mean(&out.image) / mean(&bdpt.image) - 1.0).abs() < 0.05, "{} vs {}", mean(&out.image), mean(&bdpt.image));
 }
 
-fn pssmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> (RenderOutput, MmltReport) {
+fn pssmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> RenderOutput {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     let m = PssmltIntegrator { bootstrap: 200_000, ..PssmltIntegrator::new(5) };
-    m.render_with_report(scene, &RenderSettings { budget: Budget::Samples(mpp), seed, threads }, &control).unwrap()
+    m.render(scene, &RenderSettings { budget: Budget::Samples(mpp), seed, threads }, &control).unwrap()
 }
 
 #[test]
 fn pssmlt_agrees_with_bdpt_on_a_cornell_box() {
     let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
     let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
-    let (pssmlt, report) = pssmlt_render(&scene, 1024, 2, 0);
+    let pssmlt = pssmlt_render(&scene, 1024, 2, 0);
     let (a, b) = (block_stats(&pssmlt.image, 16), block_stats(&bdpt.image, 16));
     let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
     assert!((mean(&a) / mean(&b) - 1.0).abs() < 0.01, "image means {} vs {}", mean(&a), mean(&b));
     for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
         assert!((ma - mb).abs() < 4.0 * sb + 0.03 * mb, "block {i}: pssmlt {ma} vs bdpt {mb} ± {sb}");
     }
-    assert_eq!(report.depths.len(), 1);
-    assert!(report.depths[0].all_depths && report.depths[0].invalid == 0);
-    assert!(report.depths[0].b_rel_se < 0.01, "b is pinned down: {:?}", report.depths[0]);
+    assert_eq!(pssmlt.chains.len(), 1);
+    assert!(pssmlt.chains[0].all_depths && pssmlt.chains[0].invalid == 0);
+    assert!(pssmlt.chains[0].b_rel_se < 0.01, "b is pinned down: {:?}", pssmlt.chains[0]);
 }
 
 #[test]
 fn pssmlt_passes_the_white_furnace() {
     let scene = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
-    let (out, _) = pssmlt_render(&scene, 256, 3, 0);
+    let out = pssmlt_render(&scene, 256, 3, 0);
     let (sphere, sky) = classify_furnace_pixels(&scene);
     let mean = |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
     assert!((mean(&sphere) - 0.8).abs() < 0.01, "sphere {}", mean(&sphere));
@@ -443,7 +443,10 @@ fn pssmlt_is_bit_identical_at_any_thread_count() {
     let control = RenderControl::new(&cancel, &|_| {});
     let m = PssmltIntegrator { bootstrap: 5_000, chains: 8, ..PssmltIntegrator::new(4) };
     let run = |threads| {
-        m.render(&scene, &RenderSettings { budget: Budget::Samples(8), seed: 9, threads }, &control).image.pixels
+        m.render(&scene, &RenderSettings { budget: Budget::Samples(8), seed: 9, threads }, &control)
+            .unwrap()
+            .image
+            .pixels
     };
     let one = run(1);
     assert!(one == run(2) && one == run(3));
@@ -466,7 +469,7 @@ fn check_snapshots(integrator: &dyn Integrator, reference_mean: f64) {
     let times = [Duration::from_millis(150), Duration::from_millis(300), Duration::from_millis(450)];
     let control = RenderControl::new(&cancel, &|_| {}).with_snapshots(&times, &on_snapshot);
     let settings = RenderSettings { budget: Budget::Time(Duration::from_millis(700)), seed: 3, threads: 2 };
-    let out = integrator.render(&scene, &settings, &control);
+    let out = integrator.render(&scene, &settings, &control).unwrap();
     let taken = taken.into_inner().unwrap();
     let name = integrator.name();
     assert_eq!(taken.iter().map(|t| t.0).collect::<Vec<_>>(), vec![0, 1, 2], "{name}");
@@ -482,7 +485,7 @@ fn check_snapshots(integrator: &dyn Integrator, reference_mean: f64) {
         count.fetch_add(1, Ordering::Relaxed);
     };
     let control = RenderControl::new(&cancel, &|_| {}).with_snapshots(&times, &on_snapshot);
-    integrator.render(&scene, &RenderSettings { budget: Budget::Samples(1), seed: 3, threads: 2 }, &control);
+    integrator.render(&scene, &RenderSettings { budget: Budget::Samples(1), seed: 3, threads: 2 }, &control).unwrap();
     assert_eq!(count.load(Ordering::Relaxed), 0, "{name}");
 }
 

@@ -6,7 +6,9 @@
 //! so that time budgets and Ctrl-C stop between passes or, within a pass, between rows. A pass
 //! stopped for a snapshot resumes where each tile stopped.
 
-use super::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats, SnapshotClock};
+use super::render_loop::RenderLoop;
+use super::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats};
+use crate::bidir::Paths;
 use crate::camera::Camera;
 use crate::film::{Film, SplatBuffer, Tile, TileBuffer};
 use crate::geometry::Ray;
@@ -15,7 +17,6 @@ use crate::sampler::{IndependentSampler, Sampler, Stream};
 use crate::scene::Scene;
 use crate::texture::Image;
 use rayon::prelude::*;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 const TILE_SIZE: u32 = 16;
@@ -29,12 +30,15 @@ pub struct SampleCtx<'a> {
     pub splats: &'a mut SplatBuffer,
     /// Extra images (for example one per BDPT strategy), developed like the splats.
     pub layers: &'a mut [SplatBuffer],
+    /// Subpath storage reused from sample to sample (bidirectional estimators).
+    pub paths: &'a mut Paths,
 }
 
-/// A worker thread's splat buffer and extra layers.
+/// A worker thread's splat buffer, extra layers and subpath storage.
 struct ThreadBuffers {
     splats: SplatBuffer,
     layers: Vec<SplatBuffer>,
+    paths: Paths,
 }
 
 /// Estimates the radiance arriving along a camera ray.
@@ -62,15 +66,15 @@ struct Pass<'a> {
     seed: u64,
     samples: std::ops::Range<u32>,
     /// Stop at this instant (never during the first pass, so every pixel gets a sample).
-    deadline: Option<Instant>,
-    control: &'a RenderControl<'a>,
+    stop_at: Option<Instant>,
+    render: &'a RenderLoop<'a>,
     /// Per tile, the row this pass starts at (after a snapshot interrupted it).
     resume: &'a [u32],
 }
 
 impl Pass<'_> {
     fn should_stop(&self) -> bool {
-        self.control.cancel.load(Ordering::Relaxed) || self.deadline.is_some_and(|d| Instant::now() >= d)
+        self.render.cancelled() || self.stop_at.is_some_and(|d| Instant::now() >= d)
     }
 
     fn render_tile<E: PixelEstimator>(
@@ -83,8 +87,8 @@ impl Pass<'_> {
         let camera: &Camera = &self.scene.camera;
         let mut buffer = TileBuffer::new(film, tile);
         let mut samples = 0u64;
-        let ThreadBuffers { splats, layers } = buffers;
-        let mut ctx = SampleCtx { rays: 0, raster: Vec2::ZERO, splats, layers };
+        let ThreadBuffers { splats, layers, paths } = buffers;
+        let mut ctx = SampleCtx { rays: 0, raster: Vec2::ZERO, splats, layers, paths };
         let first_row = self.resume[index];
         let mut next_row = first_row;
         for y in first_row..tile.y1 {
@@ -107,7 +111,7 @@ impl Pass<'_> {
                     samples += 1;
                 }
             }
-            (self.control.on_progress)(u64::from(tile.x1 - tile.x0) * self.samples.len() as u64);
+            self.render.progress(u64::from(tile.x1 - tile.x0) * self.samples.len() as u64);
             next_row = y + 1;
         }
         TileResult { buffer, samples, rays: ctx.rays, next_row }
@@ -135,34 +139,30 @@ pub fn render_tiles<E: PixelEstimator>(
     settings: &RenderSettings,
     control: &RenderControl,
 ) -> RenderOutput {
-    let start = Instant::now();
+    let render = RenderLoop::new(settings, control);
     let tiles = scene.film.tiles(TILE_SIZE);
     let mut film = Film::new(scene.film);
     let (sw, sh) = if E::SPLATS { (scene.film.width, scene.film.height) } else { (0, 0) };
     let mut stats = RenderStats::default();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(settings.threads)
-        .build()
-        .expect("a rayon thread pool can be created");
     let layer_count = estimator.layers();
     let (fw, fh) = (scene.film.width, scene.film.height);
-    let thread_buffers: Vec<std::sync::Mutex<ThreadBuffers>> = (0..pool.current_num_threads().max(1))
+    let thread_buffers: Vec<std::sync::Mutex<ThreadBuffers>> = (0..render.threads().max(1))
         .map(|_| {
             let layers = (0..layer_count).map(|_| SplatBuffer::new(fw, fh)).collect();
-            std::sync::Mutex::new(ThreadBuffers { splats: SplatBuffer::new(sw, sh), layers })
+            std::sync::Mutex::new(ThreadBuffers { splats: SplatBuffer::new(sw, sh), layers, paths: Paths::default() })
         })
         .collect();
-    let (max_spp, deadline) = match settings.budget {
-        Budget::Samples(n) => (n, None),
-        Budget::Time(d) => (u32::MAX, Some(start + d)),
+    let max_spp = match settings.budget {
+        Budget::Samples(n) => n,
+        Budget::Time(_) => u32::MAX,
     };
-    let mut clock = SnapshotClock::new(start, control, settings.budget);
+    let mut snapshots = render.snapshots(settings.budget);
     let mut resume: Vec<u32> = tiles.iter().map(|t| t.y0).collect();
     let mut done = 0u32;
     while done < max_spp {
         let size = done.max(1).min(max_spp - done);
         // Later passes stop at the deadline or at the next snapshot, whichever comes first.
-        let stop_at = match (deadline, clock.next_due()) {
+        let stop_at = match (render.deadline, snapshots.next_due()) {
             (Some(d), Some(s)) => Some(d.min(s)),
             (d, s) => d.or(s),
         };
@@ -170,16 +170,16 @@ pub fn render_tiles<E: PixelEstimator>(
             scene,
             seed: settings.seed,
             samples: done..done + size,
-            deadline: if done == 0 { None } else { stop_at },
-            control,
+            stop_at: if done == 0 { None } else { stop_at },
+            render: &render,
             resume: &resume,
         };
-        if control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| done > 0 && Instant::now() >= d) {
+        if render.cancelled() || (done > 0 && render.past_deadline()) {
             break;
         }
         // One splat buffer per worker thread, locked once per tile (never per sample); the
         // fixed-point sums make the merge order irrelevant.
-        let results: Vec<TileResult> = pool.install(|| {
+        let results: Vec<TileResult> = render.install(|| {
             tiles
                 .par_iter()
                 .copied()
@@ -199,25 +199,24 @@ pub fn render_tiles<E: PixelEstimator>(
             finished &= r.next_row == tile.y1;
             *row = r.next_row;
         }
-        if clock.due() && !control.cancel.load(Ordering::Relaxed) {
+        snapshots.take(&render, |seconds| {
             let mut splats = SplatBuffer::new(sw, sh);
             for buffers in &thread_buffers {
                 splats.merge(&buffers.lock().unwrap_or_else(std::sync::PoisonError::into_inner).splats);
             }
-            let snapshot = RenderOutput {
+            RenderOutput {
                 image: develop(&film, &splats, E::SPLATS, stats.pixel_samples),
-                stats: RenderStats { spp_completed: done, seconds: start.elapsed().as_secs_f64(), ..stats.clone() },
+                stats: RenderStats { spp_completed: done, seconds, ..stats.clone() },
                 layers: Vec::new(),
                 chains: Vec::new(),
-            };
-            clock.deliver(control, &snapshot);
-        }
+            }
+        });
         if finished {
             done += size;
             for (row, tile) in resume.iter_mut().zip(&tiles) {
                 *row = tile.y0;
             }
-        } else if control.cancel.load(Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d) {
+        } else if render.should_stop() {
             break;
         }
     }
@@ -232,8 +231,7 @@ pub fn render_tiles<E: PixelEstimator>(
     }
     stats.spp_completed = done;
     stats.invalid_samples = film.invalid_samples + splats.invalid;
-    stats.cancelled = control.cancel.load(Ordering::Relaxed);
-    stats.seconds = start.elapsed().as_secs_f64();
+    render.finish(&mut stats);
     let image = develop(&film, &splats, E::SPLATS, stats.pixel_samples);
     let per_sample = f64::from(fw) * f64::from(fh) / (stats.pixel_samples.max(1) as f64);
     let layers = layers.iter().map(|l| l.image(per_sample)).collect();

@@ -4,7 +4,8 @@
 //! that are NaN, infinite or negative count as zero. The chain keeps its state between calls, so
 //! time-budgeted renders can advance all chains in rounds.
 
-use super::{DepthStats, Moments, Paths};
+use super::{DepthStats, Moments};
+use crate::bidir::Paths;
 use crate::film::SharedSplats;
 use crate::math::rng::Pcg32;
 use crate::sampler::PssSampler;
@@ -13,49 +14,78 @@ use crate::sampler::PssSampler;
 pub trait State: Default {
     /// The target value `f` (0 for invalid states).
     fn value(&self) -> f32;
+    /// Whether the evaluation met a NaN, infinite or negative value (which counts as zero).
+    fn invalid(&self) -> bool;
     /// The bidirectional technique the state chose, for the technique-change statistics.
     fn technique(&self) -> usize;
     /// Adds the state's contributions, each times `scale`, to the film.
     fn splat(&self, splats: &SharedSplats, scale: f32);
 }
 
-/// Evaluates the sampler's current state into `out`; returns whether its value was invalid
-/// (NaN, infinite or negative, counted as zero).
+/// What evaluating a primary-sample-space state needs: the sampler holding the state, subpath
+/// storage reused from evaluation to evaluation, and the count of rays traced.
+pub struct EvalContext {
+    pub sampler: PssSampler,
+    pub paths: Paths,
+    pub rays: u64,
+}
+
+impl EvalContext {
+    pub fn new(sampler: PssSampler) -> Self {
+        Self { sampler, paths: Paths::default(), rays: 0 }
+    }
+}
+
+/// A chain's target: the value of the state the context's sampler holds.
 pub trait Target {
     type State: State;
-    fn evaluate(&self, sampler: &mut PssSampler, paths: &mut Paths, rays: &mut u64, out: &mut Self::State) -> bool;
+    /// Evaluates the state `cx.sampler` holds. `recycled` is a state that is no longer needed:
+    /// the result may reuse its storage.
+    fn evaluate(&self, cx: &mut EvalContext, recycled: Self::State) -> Self::State;
+}
+
+/// A target value as the chains use it: NaN, infinite, negative and zero values all count as
+/// zero.
+pub fn target_value(v: f32) -> f32 {
+    if v.is_finite() && v > 0.0 { v } else { 0.0 }
 }
 
 pub struct Chain<S> {
-    sampler: PssSampler,
+    cx: EvalContext,
     rng: Pcg32,
     current: S,
     proposal: S,
-    paths: Paths,
     pub stats: DepthStats,
     /// The large-step proposals' values.
     pub large: Moments,
-    pub rays: u64,
 }
 
 impl<S: State> Chain<S> {
     /// Starts from the state `sampler` holds (its first, large step), evaluated and accepted.
-    pub fn start(target: &impl Target<State = S>, mut sampler: PssSampler, rng: Pcg32, depth: usize) -> Self {
-        let mut paths = Paths::default();
-        let mut rays = 0;
-        let mut current = S::default();
-        target.evaluate(&mut sampler, &mut paths, &mut rays, &mut current);
-        sampler.accept();
+    pub fn start(target: &impl Target<State = S>, sampler: PssSampler, rng: Pcg32, depth: usize) -> Self {
+        let mut cx = EvalContext::new(sampler);
+        let current = target.evaluate(&mut cx, S::default());
+        cx.sampler.accept();
         Self {
-            sampler,
+            cx,
             rng,
             current,
             proposal: S::default(),
-            paths,
             stats: DepthStats { depth, ..DepthStats::default() },
             large: Moments::default(),
-            rays,
         }
+    }
+
+    /// Rays traced since the chain started.
+    pub fn rays(&self) -> u64 {
+        self.cx.rays
+    }
+
+    /// Replaces this chain by `fresh`, keeping the count of rays traced by both.
+    pub fn restart(&mut self, fresh: Chain<S>) {
+        let rays = self.cx.rays;
+        *self = fresh;
+        self.cx.rays += rays;
     }
 
     /// The current state.
@@ -70,7 +100,7 @@ impl<S: State> Chain<S> {
     /// Exchanges the whole states (primary-sample vector with its stamps, and the evaluated
     /// state) of two chains; each keeps its random numbers for acceptance and its statistics.
     pub fn exchange(&mut self, other: &mut Chain<S>) {
-        std::mem::swap(&mut self.sampler, &mut other.sampler);
+        std::mem::swap(&mut self.cx.sampler, &mut other.cx.sampler);
         std::mem::swap(&mut self.current, &mut other.current);
     }
 
@@ -112,15 +142,15 @@ impl<S: State> Chain<S> {
         splats: Option<&SharedSplats>,
         mut observe: impl FnMut(&mut S),
     ) {
-        self.sampler.start_iteration();
-        let large = self.sampler.is_large_step();
-        let invalid = target.evaluate(&mut self.sampler, &mut self.paths, &mut self.rays, &mut self.proposal);
+        self.cx.sampler.start_iteration();
+        let large = self.cx.sampler.is_large_step();
+        self.proposal = target.evaluate(&mut self.cx, std::mem::take(&mut self.proposal));
         if large {
             observe(&mut self.proposal);
         }
         let (proposal, current) = (&self.proposal, &self.current);
         let s = &mut self.stats;
-        s.invalid += u64::from(invalid);
+        s.invalid += u64::from(proposal.invalid());
         if large {
             self.large.push(f64::from(proposal.value()));
             s.large_steps_proposed += 1;
@@ -146,9 +176,9 @@ impl<S: State> Chain<S> {
                 s.small_steps_accepted += 1;
             }
             std::mem::swap(&mut self.current, &mut self.proposal);
-            self.sampler.accept();
+            self.cx.sampler.accept();
         } else {
-            self.sampler.reject();
+            self.cx.sampler.reject();
         }
     }
 }

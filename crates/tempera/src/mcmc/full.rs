@@ -5,11 +5,11 @@
 //! (`t = 1`), wherever the connection reaches the film. The target is the sum of the
 //! contributions' luminances, so every contribution is splatted as `C_i / f`.
 
-use super::{Paths, State};
-use crate::bidir::{Heuristic, Subpaths, camera_subpath, connect, light_subpath};
+use super::{EvalContext, State, valid_radiance};
+use crate::bidir::{Heuristic, camera_subpath, connect, light_subpath};
 use crate::film::SharedSplats;
 use crate::math::{Rgb, Vec2, luminance};
-use crate::sampler::{PssSampler, Sampler, Stream};
+use crate::sampler::{Sampler, Stream};
 use crate::scene::Scene;
 
 /// Every contribution of one state and the target value.
@@ -17,11 +17,17 @@ use crate::scene::Scene;
 pub struct FullContribution {
     pub splats: Vec<(Vec2, Rgb)>,
     pub f: f32,
+    /// A contribution was NaN, infinite or negative (it was dropped).
+    pub invalid: bool,
 }
 
 impl State for FullContribution {
     fn value(&self) -> f32 {
         self.f
+    }
+
+    fn invalid(&self) -> bool {
+        self.invalid
     }
 
     fn technique(&self) -> usize {
@@ -35,18 +41,20 @@ impl State for FullContribution {
     }
 }
 
-/// Evaluates the state of `sampler` as one BDPT sample with paths of at most `max_depth`
-/// scattering events; returns whether a contribution was invalid (it is then dropped).
+/// Evaluates the state of `cx.sampler` as one BDPT sample with paths of at most `max_depth`
+/// scattering events (invalid contributions are dropped and the result marked invalid);
+/// `recycled`'s storage is reused.
 pub fn evaluate_full(
     scene: &Scene,
     max_depth: u32,
-    sampler: &mut PssSampler,
-    paths: &mut Paths,
-    rays: &mut u64,
-    out: &mut FullContribution,
-) -> bool {
+    cx: &mut EvalContext,
+    recycled: FullContribution,
+) -> FullContribution {
+    let mut out = recycled;
     out.splats.clear();
     out.f = 0.0;
+    out.invalid = false;
+    let EvalContext { sampler, paths, rays } = cx;
     sampler.start_stream(Stream::Camera);
     let film = sampler.next_2d();
     let lens = sampler.next_2d();
@@ -56,22 +64,19 @@ pub fn evaluate_full(
     *rays += 1;
     camera_subpath(scene, ray, sampler, max_depth, &mut paths.camera, rays);
     light_subpath(scene, sampler, max_depth, &mut paths.light, rays);
-    let (camera, light) = (&paths.camera, &paths.light);
-    let mut invalid = false;
     let mut at_pixel = Rgb::ZERO;
-    for t in 1..=camera.len() {
-        for s in 0..=light.len() {
+    for t in 1..=paths.camera.len() {
+        for s in 0..=paths.light.len() {
             let depth = (s + t) as i64 - 2;
             if (s == 1 && t == 1) || depth < 0 || depth > i64::from(max_depth) {
                 continue;
             }
-            let subpaths = Subpaths { light, camera };
-            let Some(c) = connect(scene, subpaths, (s, t), sampler, Heuristic::Power, rays) else {
+            let Some(c) = connect(scene, paths.subpaths(), (s, t), sampler, Heuristic::Power, rays) else {
                 continue;
             };
             let v = c.l * c.weight;
-            if !v.is_finite() || v.min_element() < 0.0 {
-                invalid = true;
+            if !valid_radiance(v) {
+                out.invalid = true;
                 continue;
             }
             match (t, c.raster) {
@@ -91,7 +96,7 @@ pub fn evaluate_full(
     if !out.f.is_finite() {
         out.splats.clear();
         out.f = 0.0;
-        return true;
+        out.invalid = true;
     }
-    invalid
+    out
 }

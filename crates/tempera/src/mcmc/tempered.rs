@@ -5,10 +5,9 @@
 //! stored state re-evaluated under its own target reproduces its cached value exactly. The
 //! contribution a state splats is always the untempered one (replica 0's).
 
-use super::{Contribution, Evaluated, Paths, State, Target, evaluate_connection};
-use crate::bidir::{Subpaths, TemperScratch, Tempering, tempered};
+use super::{Contribution, EvalContext, Evaluated, State, Target, evaluate_connection};
+use crate::bidir::{Paths, TemperScratch, Tempering, tempered};
 use crate::film::SharedSplats;
-use crate::sampler::PssSampler;
 use crate::scene::Scene;
 
 /// A state of one replica: its untempered contribution, its value under the target of the
@@ -29,6 +28,10 @@ pub struct TemperedState {
 impl State for TemperedState {
     fn value(&self) -> f32 {
         self.value
+    }
+
+    fn invalid(&self) -> bool {
+        self.contribution.invalid
     }
 
     fn technique(&self) -> usize {
@@ -56,27 +59,24 @@ impl TemperedTarget<'_> {
         }
         let Some(e) = state.evaluated else { return 0.0 };
         let Some(c) = &e.connection else { return 0.0 };
-        let paths = Subpaths { light: &state.paths.light, camera: &state.paths.camera };
-        let (l, w) = tempered(self.scene, paths, (e.s, e.t), c, &self.temper, &mut state.scratch);
-        let (tempered, invalid) = e.contribution(l, w);
-        if invalid { 0.0 } else { tempered.f }
+        let (l, w) = tempered(self.scene, state.paths.subpaths(), (e.s, e.t), c, &self.temper, &mut state.scratch);
+        // An invalid value has a zero contribution.
+        e.contribution(l, w).f
     }
 }
 
 impl Target for TemperedTarget<'_> {
     type State = TemperedState;
 
-    fn evaluate(&self, sampler: &mut PssSampler, _: &mut Paths, rays: &mut u64, out: &mut TemperedState) -> bool {
-        let e = evaluate_connection(self.scene, self.depth, sampler, &mut out.paths, rays);
-        let (contribution, invalid) = match &e.connection {
-            Some(c) => e.contribution(c.l, c.weight),
-            None => (Contribution { technique: e.s, ..Contribution::ZERO }, false),
-        };
-        out.contribution = contribution;
+    /// Evaluates the state (its subpaths kept in the state itself, for the cross-evaluations).
+    fn evaluate(&self, cx: &mut EvalContext, recycled: TemperedState) -> TemperedState {
+        let mut out = recycled;
+        let e = evaluate_connection(self.scene, self.depth, cx, &mut out.paths);
+        out.contribution = e.untempered();
         out.evaluated = Some(e);
         out.cross.clear();
-        out.value = self.value_of(out);
-        invalid
+        out.value = self.value_of(&mut out);
+        out
     }
 }
 
@@ -85,6 +85,7 @@ mod tests {
     use super::*;
     use crate::bidir::Heuristic;
     use crate::mcmc::evaluate;
+    use crate::sampler::PssSampler;
 
     #[test]
     fn cached_states_re_evaluate_exactly_and_cross_evaluations_match_fresh_ones() {
@@ -101,25 +102,17 @@ mod tests {
             for i in 0..4000u64 {
                 let depth = 1 + (i % 4) as usize;
                 let j = (i / 4 % 4) as usize;
-                let fresh = || PssSampler::new(i, 0, 0.01, 0.3);
-                let mut state = TemperedState::default();
-                let mut rays = 0;
-                target(depth, ladder[j], roughen_mis).evaluate(
-                    &mut fresh(),
-                    &mut Paths::default(),
-                    &mut rays,
-                    &mut state,
-                );
+                let fresh = || EvalContext::new(PssSampler::new(i, 0, 0.01, 0.3));
+                let mut state = target(depth, ladder[j], roughen_mis).evaluate(&mut fresh(), TemperedState::default());
                 // Replica 0's view is MMLT's target, bit for bit.
-                let (mmlt, _) = evaluate(&scene, depth, &mut fresh(), &mut Paths::default(), &mut 0);
+                let mmlt = evaluate(&scene, depth, &mut fresh());
                 assert_eq!(state.contribution, mmlt);
                 // Re-evaluating the cached state under its own target reproduces its value.
                 let cached = state.value;
                 assert_eq!(target(depth, ladder[j], roughen_mis).value_of(&mut state).to_bits(), cached.to_bits());
                 // Cross-evaluations equal fresh evaluations under the other targets.
                 for &a in &ladder {
-                    let mut other = TemperedState::default();
-                    target(depth, a, roughen_mis).evaluate(&mut fresh(), &mut Paths::default(), &mut 0, &mut other);
+                    let other = target(depth, a, roughen_mis).evaluate(&mut fresh(), TemperedState::default());
                     let cross = target(depth, a, roughen_mis).value_of(&mut state);
                     assert_eq!(cross.to_bits(), other.value.to_bits(), "state {i}, a = {a}");
                     nonzero += usize::from(cross > 0.0);

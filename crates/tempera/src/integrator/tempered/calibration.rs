@@ -4,8 +4,8 @@
 //! that estimated `b_0` (the same seeds), traced again under replica 0's target and
 //! cross-evaluated, without rays, under the others.
 
-use crate::integrator::mmlt::{GroupContext, sampler_for};
-use crate::mcmc::{Paths, Target, TemperedState, TemperedTarget};
+use crate::mcmc::bootstrap::Scratch;
+use crate::mcmc::{GroupContext, TemperedTarget, sampler_for, target_value};
 use rayon::prelude::*;
 
 /// The depth's bootstrap samples valued under every replica's target once the ladder is
@@ -17,20 +17,14 @@ pub struct Calibration {
 impl Calibration {
     /// Evaluates the first `samples` bootstrap samples of the group under replica 0's target
     /// and cross-evaluates them (no rays) under the others; returns them with the rays traced.
-    pub(in crate::integrator) fn new(targets: &[TemperedTarget], group: &GroupContext, samples: usize) -> (Self, u64) {
+    pub fn new(targets: &[TemperedTarget], group: &GroupContext, samples: usize) -> (Self, u64) {
         let evaluated: Vec<(Vec<f32>, u64)> = (0..samples)
             .into_par_iter()
-            .map_init(
-                || (TemperedState::default(), Paths::default()),
-                |(state, paths), i| {
-                    let mut sampler = sampler_for(group.seed, group.k, i, group.settings);
-                    let mut rays = 0;
-                    targets[0].evaluate(&mut sampler, paths, &mut rays, state);
-                    // Invalid values count as zero, as in the chains.
-                    let valid = |v: f32| if v.is_finite() && v > 0.0 { v } else { 0.0 };
-                    (targets.iter().map(|t| valid(t.value_of(state))).collect(), rays)
-                },
-            )
+            .map_init(Scratch::default, |scratch, i| {
+                let sampler = sampler_for(group.seed, group.k, i, group.settings);
+                let (state, rays) = scratch.evaluate(&targets[0], sampler);
+                (targets.iter().map(|t| target_value(t.value_of(state))).collect(), rays)
+            })
             .collect();
         let rays = evaluated.iter().map(|e| e.1).sum();
         (Self { values: evaluated.into_iter().map(|e| e.0).collect() }, rays)

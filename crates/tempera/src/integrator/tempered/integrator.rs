@@ -2,13 +2,11 @@
 //! determinism) with one replica ensemble per chain at every depth `k ≥ 1`; depth 0, whose
 //! only strategy has no connection vertex, runs plain MMLT chains.
 
-use super::ensemble::{Ensemble, Tuning};
-use super::{EquiEnergy, Neighbor, Permutation, SwapStrategy};
+use super::{Ensemble, EnsembleSettings, EquiEnergy, Neighbor, Permutation, Replicas, SwapKernel, Tuning};
 use crate::bidir::{Heuristic, Tempering};
-use crate::integrator::mmlt::{ChainSettings, MmltReport, StartContext, sampler_for};
-use crate::integrator::{ChainIntegrator, RenderControl, RenderOutput, RenderSettings};
+use crate::integrator::{Integrator, RenderControl, RenderOutput, RenderSettings};
 use crate::math::rng::{Pcg32, hash};
-use crate::mcmc::{Chain, Moments, SwapStats, TemperedTarget};
+use crate::mcmc::{ChainSettings, StartContext, TemperedTarget};
 use crate::scene::Scene;
 
 /// Which swap strategy the ensembles use.
@@ -97,61 +95,61 @@ impl TemperedIntegrator {
     }
 }
 
-impl ChainIntegrator for TemperedIntegrator {
+impl TemperedIntegrator {
+    /// How the ensembles are run and prepared.
+    fn ensemble_settings(&self, replicas: usize) -> EnsembleSettings {
+        let tune = self.ladder.is_empty() && self.burn_in > 0 && replicas > 1;
+        EnsembleSettings {
+            calibration_samples: self.bootstrap,
+            reuse_replicas: self.reuse_replicas,
+            swap_every: self.swap_every.max(1),
+            tuning: tune.then_some(Tuning { sweeps: self.burn_in, target: self.swap_target }),
+        }
+    }
+
+    /// Ensemble `cx.c` of depth `cx.k`: replica 0 starts exactly as an MMLT chain, the others
+    /// draw their own start states (until the depth's preparation restarts them all).
+    fn start_ensemble<'a>(&self, scene: &'a Scene, ladder: &[f32], cx: StartContext) -> Ensemble<'a> {
+        let (k, c, seed) = (cx.k, cx.c, cx.seed);
+        let ladder: &[f32] = if k == 0 { &ladder[..1] } else { ladder };
+        let kernel = match self.swap {
+            Swap::Neighbor => SwapKernel::Neighbor(Neighbor),
+            Swap::EquiEnergy => SwapKernel::EquiEnergy(EquiEnergy::from_samples(cx.bootstrap, RINGS)),
+            Swap::Permutation => SwapKernel::Permutation(Permutation::new(ladder.len())),
+        };
+        let mut replicas = Replicas { chains: Vec::with_capacity(ladder.len()), targets: Vec::new() };
+        for (j, &a) in ladder.iter().enumerate() {
+            let target = TemperedTarget { scene, depth: k, temper: self.tempering(a) };
+            let rng =
+                if j == 0 { cx.rng.clone() } else { Pcg32::new(hash(&[seed, 0x7e4b, k as u64, c as u64]), j as u64) };
+            replicas.chains.push(cx.start_chain(&target, rng));
+            replicas.targets.push(target);
+        }
+        let rng = Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11);
+        Ensemble::new(replicas, kernel, self.ensemble_settings(ladder.len()), rng)
+    }
+
+    fn tempering(&self, a: f32) -> Tempering {
+        Tempering { a, heuristic: Heuristic::Power, roughen_mis: self.roughen_mis }
+    }
+}
+
+impl Integrator for TemperedIntegrator {
     fn name(&self) -> &'static str {
         "tempered"
     }
 
     /// Renders; the statistics carry ladders and swap statistics.
-    fn render_with_report(
+    fn render(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
         control: &RenderControl,
-    ) -> Result<(RenderOutput, MmltReport), String> {
+    ) -> Result<RenderOutput, String> {
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
         let ladder = self.ladder();
-        let temper = |a| Tempering { a, heuristic: Heuristic::Power, roughen_mis: self.roughen_mis };
-        let main = |depth| TemperedTarget { scene, depth, temper: temper(0.0) };
+        let main = |depth| TemperedTarget { scene, depth, temper: self.tempering(0.0) };
         let depths = self.max_depth as usize + 1;
-        chains.render(scene, settings, control, depths, main, |cx: StartContext| {
-            let StartContext { k, c, seed, rng, starts, bootstrap } = cx;
-            let ladder: &[f32] = if k == 0 { &ladder[..1] } else { &ladder };
-            let strategy: Box<dyn SwapStrategy> = match self.swap {
-                Swap::Neighbor => Box::new(Neighbor),
-                Swap::EquiEnergy => Box::new(EquiEnergy::from_samples(bootstrap, RINGS)),
-                Swap::Permutation => Box::new(Permutation::new(ladder.len())),
-            };
-            // Replica 0 starts exactly as an MMLT chain; the others draw their own start states.
-            let mut replicas = Vec::with_capacity(ladder.len());
-            let mut targets = Vec::with_capacity(ladder.len());
-            for (j, &a) in ladder.iter().enumerate() {
-                let target = TemperedTarget { scene, depth: k, temper: temper(a) };
-                let mut rng =
-                    if j == 0 { rng.clone() } else { Pcg32::new(hash(&[seed, 0x7e4b, k as u64, c as u64]), j as u64) };
-                let (index, _, _) = starts.sample_discrete(rng.next_f32());
-                replicas.push(Chain::start(&target, sampler_for(seed, k, index, &chains), rng, k));
-                targets.push(target);
-            }
-            Ensemble {
-                replicas,
-                targets,
-                strategy,
-                rng: Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11),
-                swaps: SwapStats::new(ladder.len()),
-                cross_cache: Vec::new(),
-                calibration_samples: self.bootstrap,
-                reuse_replicas: self.reuse_replicas,
-                large: vec![Moments::default(); ladder.len()],
-                swap_every: self.swap_every.max(1),
-                sweeps: 0,
-                reuse: None,
-                tuning: (self.ladder.is_empty() && self.burn_in > 0 && ladder.len() > 1).then_some(Tuning {
-                    sweeps: self.burn_in,
-                    target: self.swap_target,
-                    n: 0,
-                }),
-            }
-        })
+        chains.render(scene, settings, control, depths, main, |cx| self.start_ensemble(scene, &ladder, cx))
     }
 }

@@ -18,18 +18,22 @@ mod calibration;
 mod ensemble;
 mod equi_energy;
 mod integrator;
+mod ladder;
 mod neighbor;
 mod permutation;
+mod replicas;
 mod reuse;
 
 #[cfg(test)]
 mod tests;
 
-pub use ensemble::{Ensemble, apply_permutation};
+pub use ensemble::{Ensemble, EnsembleGroup, EnsembleSettings};
 pub use equi_energy::EquiEnergy;
 pub use integrator::{Swap, TemperedIntegrator};
+pub use ladder::{Ladder, Tuning};
 pub use neighbor::Neighbor;
 pub use permutation::Permutation;
+pub use replicas::{Replicas, apply_permutation};
 pub use reuse::Reuse;
 
 use crate::math::rng::Pcg32;
@@ -47,6 +51,25 @@ pub trait CrossValues {
 pub trait SwapStrategy: Send + Sync {
     fn name(&self) -> &'static str;
     fn step(&self, values: &mut dyn CrossValues, rng: &mut Pcg32, stats: &mut SwapStats) -> Option<Vec<usize>>;
+}
+
+/// The swap kernel of an ensemble: one of the strategies, each in a file of its own.
+#[derive(Clone, Debug)]
+pub enum SwapKernel {
+    Neighbor(Neighbor),
+    EquiEnergy(EquiEnergy),
+    Permutation(Permutation),
+}
+
+impl SwapKernel {
+    /// One swap step of the kernel (see [`SwapStrategy::step`]).
+    pub fn step(&self, values: &mut dyn CrossValues, rng: &mut Pcg32, stats: &mut SwapStats) -> Option<Vec<usize>> {
+        match self {
+            SwapKernel::Neighbor(s) => s.step(values, rng, stats),
+            SwapKernel::EquiEnergy(s) => s.step(values, rng, stats),
+            SwapKernel::Permutation(s) => s.step(values, rng, stats),
+        }
+    }
 }
 
 /// The Metropolis acceptance of exchanging the states of replicas `i` and `j`, in `f64`.

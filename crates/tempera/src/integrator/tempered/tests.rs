@@ -224,8 +224,8 @@ mod integrator {
         let control = RenderControl::new(&cancel, &|_| {});
         let mmlt = MmltIntegrator { bootstrap: 5_000, chains: 8, ..MmltIntegrator::new(5) };
         let tempered = TemperedIntegrator { bootstrap: 5_000, chains: 8, replicas: 1, ..TemperedIntegrator::new(5) };
-        let a = mmlt.render(&scene, &settings(16, 3, 0), &control);
-        let b = tempered.render(&scene, &settings(16, 3, 0), &control);
+        let a = mmlt.render(&scene, &settings(16, 3, 0), &control).unwrap();
+        let b = tempered.render(&scene, &settings(16, 3, 0), &control).unwrap();
         assert!(a.image.pixels == b.image.pixels, "replicas = 1 is MMLT bit for bit");
     }
 
@@ -250,16 +250,16 @@ mod integrator {
                 reuse_replicas: false,
                 ..TemperedIntegrator::new(5)
             };
-            let (out, report) = t.render_with_report(&cornell, &settings(512, 2, 0), &control).unwrap();
+            let out = t.render(&cornell, &settings(512, 2, 0), &control).unwrap();
             let (a, b) = (block_stats(&out.image, 16), block_stats(&bdpt.image, 16));
             assert!((mean(&a) / mean(&b) - 1.0).abs() < 0.01, "{swap:?}: image means {} vs {}", mean(&a), mean(&b));
             for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
                 assert!((ma - mb).abs() < 4.0 * sb + 0.03 * mb, "{swap:?} block {i}: {ma} vs {mb} ± {sb}");
             }
-            let swaps = report.depths[1].swaps.as_ref().unwrap();
+            let swaps = out.chains[1].swaps.as_ref().unwrap();
             let exchanged: u64 = swaps.accepted.iter().sum::<u64>() + swaps.non_identity;
             assert!(exchanged > swaps.steps / 2, "{swap:?}: states move between replicas: {swaps:?}");
-            let (out, _) = t.render_with_report(&furnace, &settings(128, 3, 0), &control).unwrap();
+            let out = t.render(&furnace, &settings(128, 3, 0), &control).unwrap();
             let (sphere, sky) = classify_furnace_pixels(&furnace);
             let m =
                 |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
@@ -281,20 +281,20 @@ mod integrator {
         for swap in [Swap::Neighbor, Swap::EquiEnergy, Swap::Permutation] {
             let t =
                 TemperedIntegrator { bootstrap: 50_000, chains: 16, replicas: 4, swap, ..TemperedIntegrator::new(5) };
-            let (out, report) = t.render_with_report(&scene, &settings(256, 2, 0), &control).unwrap();
+            let out = t.render(&scene, &settings(256, 2, 0), &control).unwrap();
             let ratio = mean(&out.image) / mean(&bdpt.image);
             assert!((ratio - 1.0).abs() < 0.03, "{swap:?}: image mean ratio {ratio}");
             let (a, b) = (block_stats(&out.image, 12), block_stats(&bdpt.image, 12));
             for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
                 assert!((ma - mb).abs() < 4.0 * sb + 0.1 * mb, "{swap:?} block {i}: {ma} vs {mb} ± {sb}");
             }
-            let swaps = report.depths[2].swaps.as_ref().expect("depth 2 has an ensemble");
+            let swaps = out.chains[2].swaps.as_ref().expect("depth 2 has an ensemble");
             let accepted: u64 = swaps.accepted.iter().sum();
             assert!(swaps.steps > 0 && accepted + swaps.non_identity > 0, "{swap:?}: {swaps:?}");
-            assert_eq!(report.depths[2].ladder.len(), 4);
+            assert_eq!(out.chains[2].ladder.len(), 4);
             let small =
                 TemperedIntegrator { bootstrap: 2_000, chains: 4, replicas: 3, swap, ..TemperedIntegrator::new(4) };
-            let run = |threads| small.render(&scene, &settings(4, 7, threads), &control).image.pixels;
+            let run = |threads| small.render(&scene, &settings(4, 7, threads), &control).unwrap().image.pixels;
             assert!(run(1) == run(2), "{swap:?}: same image at any thread count");
         }
     }
@@ -314,8 +314,8 @@ mod integrator {
                 swap_every: every,
                 ..TemperedIntegrator::new(4)
             };
-            let (_, report) = t.render_with_report(&scene, &settings(32, 1, 0), &control).unwrap();
-            for d in report.depths.iter().filter(|d| d.depth > 0 && d.mutations > 0) {
+            let out = t.render(&scene, &settings(32, 1, 0), &control).unwrap();
+            for d in out.chains.iter().filter(|d| d.depth > 0 && d.mutations > 0) {
                 let steps = d.swaps.as_ref().unwrap().steps;
                 // Each of the depth's 8 ensembles rounds its own count down.
                 assert!(
@@ -355,29 +355,30 @@ mod reuse {
             reuse_replicas: true,
             ..TemperedIntegrator::new(5)
         };
-        let (out, report) = t.render_with_report(&scene, &settings(256, 2), &control).unwrap();
+        let out = t.render(&scene, &settings(256, 2), &control).unwrap();
         let ratio = mean(&out.image) / mean(&bdpt.image);
         assert!((ratio - 1.0).abs() < 0.03, "image mean ratio {ratio}");
         let (a, b) = (block_stats(&out.image, 12), block_stats(&bdpt.image, 12));
         for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
             assert!((ma - mb).abs() < 4.0 * sb + 0.1 * mb, "block {i}: {ma} vs {mb} ± {sb}");
         }
-        let ratios = &report.depths[2].replica_b_ratios;
+        let ratios = &out.chains[2].replica_b_ratios;
         assert_eq!(ratios.len(), 4);
         assert!((ratios[0] - 1.0).abs() < 1e-6 && ratios.iter().all(|r| r.is_finite() && *r > 0.0), "{ratios:?}");
         assert!(ratios.iter().any(|r| (r - 1.0).abs() > 0.01), "roughening changes the normalisation: {ratios:?}");
         assert!(
-            t.render(&scene, &settings(4, 7), &control).image.pixels == {
+            t.render(&scene, &settings(4, 7), &control).unwrap().image.pixels == {
                 let one = RenderSettings { threads: 1, ..settings(4, 7) };
-                t.render(&scene, &one, &control).image.pixels
+                t.render(&scene, &one, &control).unwrap().image.pixels
             }
         );
 
         let furnace = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
         // b_1 from 20,000 bootstrap samples has a relative error of about 1 % here; 100,000
         // keep the furnace's level within the tolerance.
-        let out =
-            TemperedIntegrator { bootstrap: 100_000, chains: 16, ..t }.render(&furnace, &settings(256, 3), &control);
+        let out = TemperedIntegrator { bootstrap: 100_000, chains: 16, ..t }
+            .render(&furnace, &settings(256, 3), &control)
+            .unwrap();
         let (sphere, sky) = classify_furnace_pixels(&furnace);
         let m = |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
         assert!((m(&sphere) - 0.8).abs() < 0.01, "furnace sphere {}", m(&sphere));
@@ -418,7 +419,7 @@ mod start {
         let tempered = (0..seeds)
             .map(|seed| {
                 let settings = RenderSettings { budget: Budget::Samples(16), seed, threads: 0 };
-                mean(&t.render(&scene, &settings, &control).image)
+                mean(&t.render(&scene, &settings, &control).unwrap().image)
             })
             .collect::<Vec<_>>();
         let ratio = tempered.iter().sum::<f64>() / seeds as f64 / bdpt;
@@ -471,8 +472,8 @@ mod tuning {
             let t =
                 TemperedIntegrator { bootstrap: 20_000, chains: 8, replicas: 4, burn_in, ..TemperedIntegrator::new(3) };
             let settings = RenderSettings { budget: Budget::Samples(16), seed: 5, threads: 0 };
-            let (_, report) = t.render_with_report(scene, &settings, &control).unwrap();
-            let d = &report.depths[2];
+            let out = t.render(scene, &settings, &control).unwrap();
+            let d = &out.chains[2];
             (d.swaps.as_ref().unwrap().neighbor_acceptance(), d.ladder.clone())
         };
         run(burn_in)
@@ -510,8 +511,8 @@ mod tuning {
                 ..TemperedIntegrator::new(3)
             };
             let settings = RenderSettings { budget: Budget::Samples(128), seed: 5, threads: 0 };
-            let (_, report) = t.render_with_report(&scene, &settings, &control).unwrap();
-            let d = &report.depths[2];
+            let out = t.render(&scene, &settings, &control).unwrap();
+            let d = &out.chains[2];
             (d.swaps.as_ref().unwrap().neighbor_acceptance(), d.ladder.clone())
         };
         let (acc8, ladder8) = run(0.8);

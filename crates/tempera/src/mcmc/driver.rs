@@ -1,0 +1,439 @@
+//! The chain driver shared by every Markov-chain integrator (MMLT, PSSMLT, tempered MMLT):
+//! groups of walkers (MMLT and tempering: one group per path depth; PSSMLT: one group), each
+//! group bootstrapped ([`super::bootstrap`]) for its normalisation `b` and its start states.
+//! Mutations are allotted to groups in proportion to `b` (Hachisuka et al. 2014 §5); a fixed
+//! budget runs in one round, a time budget in rounds of about one mutation per pixel until the
+//! deadline. Walkers are the unit of parallel work and splat into fixed-point buffers shared
+//! by the threads, so the image is bit-identical at any thread count.
+//!
+//! A walker splats into one or more layers per group. Layer `l`'s splats are normalised by
+//! `b_l / ρ_l`, where `b_l` is the mean of target `l` over the group's bootstrap and the large
+//! steps of the walkers sampling it, and `ρ_l` the ratio the walker weighted them with; a single
+//! layer is MMLT's `b_k` with `ρ_0 = 1`. Large steps are independent uniform samples, so the
+//! refined `b` does not hinge on the bootstrap. Each group's image is scaled by
+//! `N_pixels · b_l/ρ_l / M` (`M` the group's mutations).
+
+use super::bootstrap::{Bootstrap, sampler_for};
+use super::{Chain, DepthStats, Moments, Target};
+use crate::film::SharedSplats;
+use crate::integrator::render_loop::RenderLoop;
+use crate::integrator::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats};
+use crate::math::distribution::Distribution1D;
+use crate::math::rng::{Pcg32, hash};
+use crate::scene::Scene;
+use crate::texture::Image;
+use rayon::prelude::*;
+
+/// What the chain driver needs to know.
+#[derive(Clone, Copy, Debug)]
+pub struct ChainSettings {
+    /// Bootstrap samples per group.
+    pub bootstrap: usize,
+    /// Independent walkers per group.
+    pub chains: usize,
+    pub sigma: f32,
+    pub large_step_probability: f32,
+}
+
+/// How a group's splat layers are normalised, decided when the group is prepared.
+pub trait Layers: Send + Sync {
+    /// The layers each walker of the group splats into.
+    fn count(&self) -> usize {
+        1
+    }
+    /// For a layer `l ≥ 1`: the moments of its target over the group's bootstrap and the ratio
+    /// `ρ_l` its splats were weighted with. (Layer 0 is the group's own target, `ρ_0 = 1`.)
+    fn layer(&self, _l: usize) -> Option<(Moments, f64)> {
+        None
+    }
+    /// The ratios `ρ_l` to report in the statistics (empty: a single layer).
+    fn ratios(&self) -> &[f64] {
+        &[]
+    }
+}
+
+/// A group with a single layer: MMLT's and PSSMLT's.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OneLayer;
+
+impl Layers for OneLayer {}
+
+/// A unit of parallel work of the chain driver: one chain (MMLT, PSSMLT) or one ensemble of
+/// replicas (tempered MMLT).
+pub trait Walker: Send {
+    /// What the walkers of a group share once it is prepared.
+    type Group: Layers;
+    /// Makes up to `mutations` mutations of the main chain, splatting into `splats` (one
+    /// buffer per layer, shared with the group's other walkers); returns how many were made.
+    fn run(&mut self, group: &Self::Group, mutations: u64, splats: &[SharedSplats], stop: &dyn Fn() -> bool) -> u64;
+    /// The main chain's statistics.
+    fn stats(&self) -> DepthStats;
+    /// The moments of `layer`'s target over the walker's large-step proposals.
+    fn large(&self, layer: usize) -> Moments;
+    fn rays(&self) -> u64;
+    /// Prepares the walkers of one group together, before the first round; returns what they
+    /// share and the rays traced.
+    fn prepare_group(
+        walkers: &mut [Self],
+        group: &GroupContext,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> (Self::Group, u64)
+    where
+        Self: Sized;
+}
+
+/// What [`Walker::prepare_group`] knows of its group.
+pub struct GroupContext<'a> {
+    pub k: usize,
+    pub seed: u64,
+    pub settings: &'a ChainSettings,
+}
+
+/// Where a walker starts: walker `c` of group `k`, with the group's bootstrap values and the
+/// distribution of start states (in proportion to their value).
+pub struct StartContext<'a> {
+    pub k: usize,
+    pub c: usize,
+    pub seed: u64,
+    pub rng: Pcg32,
+    pub starts: &'a Distribution1D,
+    pub bootstrap: &'a [f32],
+    pub settings: &'a ChainSettings,
+}
+
+impl StartContext<'_> {
+    /// Starts a chain under `target` from a bootstrap state drawn with `rng` in proportion to
+    /// its value.
+    pub fn start_chain<T: Target>(&self, target: &T, mut rng: Pcg32) -> Chain<T::State> {
+        let (index, _, _) = self.starts.sample_discrete(rng.next_f32());
+        Chain::start(target, sampler_for(self.seed, self.k, index, self.settings), rng, self.k)
+    }
+}
+
+/// One chain with its target.
+pub struct Single<T: Target> {
+    pub chain: Chain<T::State>,
+    pub target: T,
+}
+
+impl<T: Target> Single<T> {
+    /// A chain under `target`, started as [`StartContext::start_chain`] does.
+    pub fn start(cx: StartContext, target: T) -> Self {
+        let chain = cx.start_chain(&target, cx.rng.clone());
+        Single { chain, target }
+    }
+}
+
+impl<T: Target + Send> Walker for Single<T>
+where
+    T::State: Send,
+{
+    type Group = OneLayer;
+
+    fn run(&mut self, _: &OneLayer, mutations: u64, splats: &[SharedSplats], stop: &dyn Fn() -> bool) -> u64 {
+        self.chain.run(&self.target, mutations, Some(&splats[0]), stop)
+    }
+
+    fn stats(&self) -> DepthStats {
+        self.chain.stats.clone()
+    }
+
+    fn large(&self, _layer: usize) -> Moments {
+        self.chain.large
+    }
+
+    fn rays(&self) -> u64 {
+        self.chain.rays()
+    }
+
+    fn prepare_group(_: &mut [Self], _: &GroupContext, _: &(dyn Fn() -> bool + Sync)) -> (OneLayer, u64) {
+        (OneLayer, 0)
+    }
+}
+
+/// One walker's place in the render.
+#[derive(Clone, Copy, Debug)]
+struct Slot {
+    /// Its group.
+    group: usize,
+    /// Its index in the group.
+    index: usize,
+    /// The group's walker count.
+    walkers: u64,
+    /// The group's mutations under a fixed budget.
+    budget: Option<u64>,
+}
+
+impl Slot {
+    /// This walker's share of its group's fixed budget.
+    fn quota(&self) -> u64 {
+        let m = self.budget.unwrap_or(0);
+        m / self.walkers + u64::from((self.index as u64) < m % self.walkers)
+    }
+}
+
+/// A prepared group: what its walkers share, and its splat buffers (one per layer).
+struct Group<L> {
+    shared: L,
+    splats: Vec<SharedSplats>,
+}
+
+impl ChainSettings {
+    pub fn new(bootstrap: usize, chains: usize, sigma: f32, large_step_probability: f32) -> Self {
+        Self { bootstrap, chains, sigma, large_step_probability }
+    }
+
+    /// Renders with `groups` independent sets of walkers (MMLT: one per path depth; PSSMLT:
+    /// one), group `k` bootstrapped under `targets(k)` and its walkers started by
+    /// `start_walker`. The statistics carry one row per group. An error when no light path
+    /// reaches the camera.
+    pub fn render<T, W>(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+        groups: usize,
+        targets: impl Fn(usize) -> T + Sync,
+        start_walker: impl Fn(StartContext) -> W + Sync,
+    ) -> Result<RenderOutput, String>
+    where
+        T: Target + Sync,
+        W: Walker,
+    {
+        let render = RenderLoop::new(settings, control);
+        render.install(|| self.render_in_pool(&render, scene, settings, groups, &targets, &start_walker))
+    }
+
+    /// Bootstraps every group; an error when all of them saw no light.
+    fn bootstrap<T: Target + Sync>(
+        &self,
+        seed: u64,
+        groups: usize,
+        targets: &(impl Fn(usize) -> T + Sync),
+    ) -> Result<(Vec<Bootstrap>, u64), String> {
+        let mut rays = 0;
+        let boots: Vec<Bootstrap> = (0..groups)
+            .map(|k| {
+                let (b, r) = Bootstrap::run(&targets(k), self, seed, k);
+                rays += r;
+                b
+            })
+            .collect();
+        let b_total: f64 = boots.iter().map(|b| b.mean).sum();
+        if b_total.is_nan() || b_total <= 0.0 {
+            return Err("no light path reaches the camera (every bootstrap sample was zero)".into());
+        }
+        Ok((boots, rays))
+    }
+
+    /// The walkers of every group with light: under a fixed budget each group's share of the
+    /// mutations in proportion to its `b`, and no more walkers than mutations.
+    fn plan(&self, boots: &[Bootstrap], budget: Option<u64>) -> Vec<Slot> {
+        let b_total: f64 = boots.iter().map(|b| b.mean).sum();
+        let mut plan = Vec::new();
+        for (k, b) in boots.iter().enumerate() {
+            if b.mean <= 0.0 {
+                continue;
+            }
+            let m_k = budget.map(|m| (b.mean / b_total * m as f64).round() as u64);
+            if m_k == Some(0) {
+                continue;
+            }
+            let walkers = m_k.map_or(self.chains as u64, |m| (self.chains as u64).min(m)).max(1);
+            for c in 0..walkers {
+                plan.push(Slot { group: k, index: c as usize, walkers, budget: m_k });
+            }
+        }
+        plan
+    }
+
+    fn render_in_pool<T, W>(
+        &self,
+        render: &RenderLoop,
+        scene: &Scene,
+        settings: &RenderSettings,
+        groups: usize,
+        targets: &(impl Fn(usize) -> T + Sync),
+        start_walker: &(impl Fn(StartContext) -> W + Sync),
+    ) -> Result<RenderOutput, String>
+    where
+        T: Target + Sync,
+        W: Walker,
+    {
+        let seed = settings.seed;
+        let (w, h) = (scene.film.width, scene.film.height);
+        let pixels = u64::from(w) * u64::from(h);
+        let (boots, mut total_rays) = self.bootstrap(seed, groups, targets)?;
+        let b_total: f64 = boots.iter().map(|b| b.mean).sum();
+        let share = |k: usize| boots[k].mean / b_total;
+        let budget = match settings.budget {
+            Budget::Samples(mpp) => Some(u64::from(mpp) * pixels),
+            Budget::Time(_) => None,
+        };
+        let plan = self.plan(&boots, budget);
+        // Walkers start from bootstrap states drawn in proportion to their value.
+        let starts: Vec<Distribution1D> = boots.iter().map(Bootstrap::starts).collect();
+        let mut walkers: Vec<W> = plan
+            .par_iter()
+            .map(|slot| {
+                let (k, c) = (slot.group, slot.index);
+                let rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, c as u64]), 7);
+                let bootstrap = &boots[k].values;
+                start_walker(StartContext { k, c, seed, rng, starts: &starts[k], bootstrap, settings: self })
+            })
+            .collect();
+        let stop = || render.should_stop();
+        let (prepared, rays) = self.prepare(&plan, &mut walkers, seed, groups, w, h, &stop);
+        total_rays += rays;
+        let run_round = |walkers: &mut [W], quota: &(dyn Fn(&Slot) -> u64 + Sync)| {
+            walkers.par_iter_mut().zip(&plan).for_each(|(walker, slot)| {
+                let group = prepared[slot.group].as_ref().expect("every planned group is prepared");
+                let done = walker.run(&group.shared, quota(slot), &group.splats, &stop);
+                render.progress(done);
+            });
+        };
+        let developed = |walkers: &[W], seconds: f64, cancelled: bool| {
+            let out = develop(&boots, walkers, &plan, &prepared, (w, h));
+            RenderOutput {
+                stats: RenderStats { rays: out.stats.rays + total_rays, seconds, cancelled, ..out.stats },
+                ..out
+            }
+        };
+        match budget {
+            // A fixed budget: one round, each walker its share of its group's mutations.
+            Some(_) => run_round(&mut walkers, &Slot::quota),
+            // A time budget: rounds of about one mutation per pixel, shared in proportion to
+            // b_k, until the deadline. Snapshots (if asked for) are developed between rounds.
+            None => {
+                let mut snapshots = render.snapshots(settings.budget);
+                while !stop() {
+                    run_round(&mut walkers, &|slot| {
+                        ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1)
+                    });
+                    snapshots.take(render, |seconds| developed(&walkers, seconds, false));
+                }
+            }
+        }
+        let mut out = developed(&walkers, 0.0, false);
+        render.finish(&mut out.stats);
+        Ok(out)
+    }
+
+    /// Prepares each group's walkers (contiguous in the plan), all groups at once (each
+    /// group's result does not depend on the others'), and allocates the group's splat
+    /// buffers, one per layer, shared by the threads.
+    #[allow(clippy::too_many_arguments)]
+    fn prepare<W: Walker>(
+        &self,
+        plan: &[Slot],
+        walkers: &mut [W],
+        seed: u64,
+        groups: usize,
+        w: u32,
+        h: u32,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> (Vec<Option<Group<W::Group>>>, u64) {
+        let mut slices: Vec<(usize, &mut [W])> = Vec::new();
+        let (mut rest, mut first) = (walkers, 0);
+        while !rest.is_empty() {
+            let k = plan[first].group;
+            let n = plan[first..].iter().take_while(|p| p.group == k).count();
+            let (group, tail) = rest.split_at_mut(n);
+            slices.push((k, group));
+            (rest, first) = (tail, first + n);
+        }
+        let results: Vec<(usize, W::Group, u64)> = slices
+            .into_par_iter()
+            .map(|(k, group)| {
+                let (shared, rays) = W::prepare_group(group, &GroupContext { k, seed, settings: self }, stop);
+                (k, shared, rays)
+            })
+            .collect();
+        let mut prepared: Vec<Option<Group<W::Group>>> = (0..groups).map(|_| None).collect();
+        let mut rays = 0;
+        for (k, shared, r) in results {
+            rays += r;
+            let splats = (0..shared.count()).map(|_| SharedSplats::new(w, h)).collect();
+            prepared[k] = Some(Group { shared, splats });
+        }
+        (prepared, rays)
+    }
+}
+
+/// The image and per-group statistics of `walkers` so far: statistics merged in walker
+/// order, each layer's normalisation `b_l` refined with the large-step proposals, each layer's
+/// splats scaled to estimate its share of the image per mutation. Rays count the walkers'
+/// rays only.
+fn develop<W: Walker>(
+    boots: &[Bootstrap],
+    walkers: &[W],
+    plan: &[Slot],
+    groups: &[Option<Group<W::Group>>],
+    (w, h): (u32, u32),
+) -> RenderOutput {
+    let pixels = u64::from(w) * u64::from(h);
+    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.splats.len());
+    let mut stats: Vec<DepthStats> =
+        (0..boots.len()).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect();
+    let mut large: Vec<Vec<Moments>> = (0..boots.len()).map(|k| vec![Moments::default(); layers(k)]).collect();
+    let mut rays = 0;
+    for (walker, slot) in walkers.iter().zip(plan) {
+        let k = slot.group;
+        stats[k].merge(&walker.stats());
+        for (l, sums) in large[k].iter_mut().enumerate() {
+            sums.merge(&walker.large(l));
+        }
+        rays += walker.rays();
+    }
+    let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
+    let mut invalid = 0;
+    for (k, d) in stats.iter_mut().enumerate() {
+        let boot = &boots[k];
+        // A target's mean over its bootstrap and large-step samples.
+        let refine = |mut prior: Moments, large: &Moments| {
+            prior.merge(large);
+            prior.mean_and_rel_se()
+        };
+        (d.b, d.b_rel_se) = refine(boot.moments(), &large[k][0]);
+        d.bootstrap_samples = boot.values.len() as u64;
+        d.large_step_samples = large[k][0].n;
+        d.invalid += boot.invalid;
+        let Some(group) = &groups[k] else {
+            invalid += d.invalid;
+            continue;
+        };
+        invalid += d.invalid + group.splats.iter().map(SharedSplats::invalid).sum::<u64>();
+        d.replica_b_ratios = group.shared.ratios().iter().map(|&r| r as f32).collect();
+        if d.mutations == 0 {
+            continue;
+        }
+        // Layer l estimates its share of the group's image per mutation: N_pixels · b_l/ρ_l / M_k
+        // (MMLT's N_pixels · b_k / M_k for one layer).
+        let mut layer_b = Vec::with_capacity(group.splats.len());
+        for (l, buffer) in group.splats.iter().enumerate() {
+            let (b, ratio) = match (l, group.shared.layer(l)) {
+                (0, _) => (d.b, 1.0),
+                (_, Some((moments, ratio))) => (refine(moments, &large[k][l]).0, ratio),
+                (_, None) => continue,
+            };
+            layer_b.push(b);
+            let layer = buffer.image(b / ratio * pixels as f64 / d.mutations as f64);
+            for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
+                *p += *q;
+            }
+        }
+        if layer_b.len() > 1 {
+            d.replica_b = layer_b;
+        }
+    }
+    let mutations: u64 = stats.iter().map(|d| d.mutations).sum();
+    let stats_total = RenderStats {
+        spp_completed: (mutations / pixels.max(1)) as u32,
+        pixel_samples: mutations,
+        rays,
+        invalid_samples: invalid,
+        seconds: 0.0,
+        cancelled: false,
+    };
+    RenderOutput { image, stats: stats_total, layers: Vec::new(), chains: stats }
+}
