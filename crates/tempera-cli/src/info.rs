@@ -26,7 +26,7 @@ pub fn run(args: InfoArgs) -> Result<()> {
         println!("  integrator    {i}");
     }
     if let Some(o) = &s.defaults.output {
-        println!("  output        {o}");
+        println!("  output        {}", o.display());
     }
     println!("  primitives    {}", s.geometry.prims.len());
     if let Some(info) = &loaded.info {

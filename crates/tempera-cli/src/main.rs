@@ -2,8 +2,10 @@
 
 mod compare;
 mod experiment;
+mod flags;
 mod info;
 mod render;
+mod run;
 mod scene;
 mod stats;
 

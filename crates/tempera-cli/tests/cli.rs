@@ -222,7 +222,11 @@ fn tempered_renders_with_every_swap_strategy_and_reports_swaps() {
         .args(["render", "--integrator", "tempered", "--replicas", "4", "--ladder", "0.05,0.1", "--mpp", "1"])
         .output()
         .unwrap();
-    assert!(!mismatch.status.success() && stderr(&mismatch).contains("--replicas must be 3"), "{}", stderr(&mismatch));
+    assert!(!mismatch.status.success() && stderr(&mismatch).contains("replicas must be 3"), "{}", stderr(&mismatch));
+    let foreign =
+        tempera().current_dir(&dir).args(["render", "--integrator", "mmlt", "--replicas", "3"]).output().unwrap();
+    let err = stderr(&foreign);
+    assert!(!foreign.status.success() && err.contains("replicas is not a setting of the mmlt"), "{err}");
 }
 
 #[test]

@@ -39,7 +39,7 @@ integrator = "bdpt"
 [[method]]
 name = "mmlt"
 integrator = "mmlt"
-args = ["--bootstrap", "2000", "--chains", "8"]
+settings = { bootstrap = 2000, chains = 8 }
 [budget]
 seconds = [0.4]
 snapshots = [0.2]
@@ -138,8 +138,10 @@ fn experiment_writes_results_images_and_report_and_resumes() {
 fn mistakes_in_the_experiment_file_are_clear_errors() {
     let dir = scratch("errors");
     for (change, expected) in [
-        (("args = [\"--bootstrap\"", "args = [\"--time\", \"3\", \"--bootstrap\""), "may not set --time"),
-        (("integrator = \"mmlt\"", "integrator = \"nope\""), "invalid value 'nope'"),
+        (("settings = { bootstrap", "settings = { time = 3, bootstrap"), "unknown field `time`"),
+        (("settings = { bootstrap", "settings = { maxdepth = 3, bootstrap"), "set `maxdepth` per [[scene]]"),
+        (("settings = { bootstrap", "settings = { replicas = 3, bootstrap"), "replicas is not a setting of the mmlt"),
+        (("integrator = \"mmlt\"", "integrator = \"nope\""), "unknown variant `nope`"),
         (("optional = true", "optional = false"), "no/such/scene.pbrt does not exist"),
         (("seconds = [0.4]", "seconds = []"), "at least one time"),
         (("spp = 16", "spp = 16\nimage = \"r.exr\""), "serves a single scene"),

@@ -29,7 +29,7 @@ fn ldr(image: &Image) -> nv_flip::FlipImageRgb8 {
 
 /// The per-pixel FLIP error of `image` against `reference` (same size, else an error) and its mean.
 pub fn flip(image: &Image, reference: &Image) -> Result<(f64, Vec<f32>), String> {
-    crate::metrics::check_sizes(image, reference)?;
+    crate::check_sizes(image, reference)?;
     if image.pixels.is_empty() {
         return Ok((0.0, Vec::new()));
     }

@@ -130,6 +130,17 @@ fn read_exr(path: &Path) -> Result<Image, ImageError> {
     Ok(image.layer_data.channel_data.pixels)
 }
 
+/// An error naming both sizes unless `image` and `reference` have the same size.
+pub fn check_sizes(image: &Image, reference: &Image) -> Result<(), String> {
+    if (image.width, image.height) != (reference.width, reference.height) {
+        return Err(format!(
+            "image is {}x{} but the reference is {}x{}",
+            image.width, image.height, reference.width, reference.height
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,6 +11,7 @@
 //! 10⁰ with a viridis-like colour map, and a colour bar with decade labels beneath the image;
 //! the FLIP error map shows the FLIP map in FLIP's magma colours with a bar from 0 to 1.
 
+use crate::check_sizes;
 use tempera::math::{Rgb, luminance};
 use tempera::texture::Image;
 
@@ -51,17 +52,6 @@ fn lum(c: Rgb) -> f64 {
 pub fn rel_se(i: Rgb, r: Rgb) -> f64 {
     let (i, r) = (lum(i), lum(r));
     (i - r).powi(2) / (r * r + EPSILON)
-}
-
-/// An error naming both sizes unless `image` and `reference` have the same size.
-pub fn check_sizes(image: &Image, reference: &Image) -> Result<(), String> {
-    if (image.width, image.height) != (reference.width, reference.height) {
-        return Err(format!(
-            "image is {}x{} but the reference is {}x{}",
-            image.width, image.height, reference.width, reference.height
-        ));
-    }
-    Ok(())
 }
 
 /// Compares `image` with `reference`; they must have the same size.

@@ -47,8 +47,8 @@ fn full_fixture_loads_every_directive_family() {
     assert_eq!((scene.geometry.prototypes.len(), scene.geometry.instances.len()), (1, 2), "instances share geometry");
     assert_eq!((scene.film.width, scene.film.height), (64, 48));
     assert_eq!((scene.defaults.spp, scene.defaults.max_depth), (8, 7));
-    assert_eq!(scene.defaults.output.as_deref(), Some("fixture.exr"));
-    assert_eq!(scene.defaults.integrator.as_deref(), Some("path"));
+    assert_eq!(scene.defaults.output.as_deref(), Some(std::path::Path::new("fixture.exr")));
+    assert_eq!(scene.defaults.integrator, Some(tempera::integrator::IntegratorKind::Path));
 
     // LookAt: the image centre looks down -z from (0, 1, 5).
     let ray = scene.camera.generate_ray(Vec2::new(32.0, 24.0), Vec2::splat(0.5));

@@ -5,6 +5,7 @@
 use anyhow::{Context, Result, bail};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
+use tempera::integrator::{IntegratorKind, IntegratorSettings};
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -30,10 +31,10 @@ pub struct Reference {
     /// A reference image (EXR or PFM); only with a single scene (else per scene).
     pub image: Option<PathBuf>,
     /// Integrator of the rendered reference (default bdpt).
-    pub method: Option<String>,
-    /// More `tempera render` flags for the reference.
+    pub method: Option<IntegratorKind>,
+    /// Its settings (the keys of a method's `settings`).
     #[serde(default)]
-    pub args: Vec<String>,
+    pub settings: IntegratorSettings,
     pub spp: Option<u32>,
     pub seconds: Option<f64>,
     /// Seed of the reference render (default 1000, apart from the runs' seeds).
@@ -61,10 +62,20 @@ pub struct SceneEntry {
 #[serde(deny_unknown_fields)]
 pub struct Method {
     pub name: String,
-    pub integrator: String,
-    /// More `tempera render` flags (budget, seed, output and scene flags are the experiment's).
+    pub integrator: IntegratorKind,
+    /// The integrator's settings, as `tempera render` flags set them (`maxdepth` is set per
+    /// [[scene]], budgets, seeds and threads by the experiment).
     #[serde(default)]
-    pub args: Vec<String>,
+    pub settings: IntegratorSettings,
+}
+
+impl Method {
+    /// The method's settings in one line, `key = value, …` (empty for the defaults).
+    pub fn describe(&self) -> String {
+        let value = serde_json::to_value(&self.settings).unwrap_or_default();
+        let entries = value.as_object().into_iter().flatten().filter(|(_, v)| !v.is_null());
+        entries.map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ")
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -92,6 +103,14 @@ fn check_name(kind: &str, name: &str) -> Result<()> {
         bail!("{kind} name '{name}' must be made of letters, digits, '-', '_', '+' and '.'");
     }
     Ok(())
+}
+
+/// A method's settings must suit its integrator and leave `maxdepth` to the scenes.
+fn check_settings(what: &str, kind: IntegratorKind, settings: &IntegratorSettings) -> Result<()> {
+    if settings.maxdepth.is_some() {
+        bail!("{what}: set `maxdepth` per [[scene]], not per method");
+    }
+    settings.validate(kind).map_err(|e| anyhow::anyhow!("{what}: {e}"))
 }
 
 impl Config {
@@ -137,7 +156,7 @@ impl Config {
                 bail!("two scenes are called '{}'", s.name);
             }
             if let Some(r) = &s.resolution {
-                crate::render::parse_resolution(r).map_err(|e| anyhow::anyhow!("scene '{}': {e}", s.name))?;
+                crate::flags::parse_resolution(r).map_err(|e| anyhow::anyhow!("scene '{}': {e}", s.name))?;
             }
         }
         for (i, m) in self.methods.iter().enumerate() {
@@ -145,6 +164,7 @@ impl Config {
             if self.methods[..i].iter().any(|o| o.name == m.name) {
                 bail!("two methods are called '{}'", m.name);
             }
+            check_settings(&format!("method '{}'", m.name), m.integrator, &m.settings)?;
         }
         let r = &self.reference;
         if r.image.is_some() && self.scenes.len() > 1 {
@@ -153,6 +173,7 @@ impl Config {
         if r.image.is_some() && (r.method.is_some() || r.spp.is_some() || r.seconds.is_some()) {
             bail!("[reference] is either an image or a method with a budget, not both");
         }
+        check_settings("[reference]", r.method.unwrap_or(IntegratorKind::Bdpt), &r.settings)?;
         if r.spp.is_some() && r.seconds.is_some() {
             bail!("[reference] takes `spp` or `seconds`, not both");
         }
@@ -205,6 +226,13 @@ seeds = [1, 2]
 
     #[test]
     fn the_documented_shape_loads() {
+        let typed = BASE.replace(
+            "integrator = \"mmlt\"",
+            "integrator = \"tempered\"\nsettings = { replicas = 3, swap = \"equi-energy\", reuse_replicas = false }",
+        );
+        let m = &parse(&typed).unwrap().methods[0];
+        assert_eq!(m.settings.swap, Some(tempera::integrator::Swap::EquiEnergy));
+        assert_eq!(m.describe(), "replicas = 3, reuse_replicas = false, swap = \"equi-energy\"");
         let c = parse(BASE).unwrap();
         assert!(c.output.ends_with("out") && c.output.components().count() > 1, "relative to the file");
         assert_eq!(c.times(), vec![0.5, 1.0, 2.0], "snapshots past the longest budget are dropped");
@@ -224,5 +252,14 @@ seeds = [1, 2]
         assert!(format!("{name:#}").contains("method name 'a/b'"), "{name:#}");
         let res = parse(&BASE.replace("32x32", "32")).unwrap_err();
         assert!(format!("{res:#}").contains("WIDTHxHEIGHT"), "{res:#}");
+        let kind = parse(&BASE.replace("integrator = \"mmlt\"", "integrator = \"sppm\"")).unwrap_err();
+        assert!(format!("{kind:#}").contains("unknown variant `sppm`"), "{kind:#}");
+        let foreign =
+            parse(&BASE.replace("integrator = \"mmlt\"", "integrator = \"mmlt\"\nsettings = { replicas = 2 }"))
+                .unwrap_err();
+        assert!(format!("{foreign:#}").contains("method 'mmlt': replicas is not a setting"), "{foreign:#}");
+        let key = parse(&BASE.replace("integrator = \"mmlt\"", "integrator = \"mmlt\"\nsettings = { chain = 2 }"))
+            .unwrap_err();
+        assert!(format!("{key:#}").contains("unknown field `chain`"), "{key:#}");
     }
 }

@@ -12,11 +12,11 @@ mod plot;
 mod reference;
 mod report;
 mod runs;
+mod scenes;
 
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
-use std::sync::atomic::Ordering;
 
 pub use config::Config;
 
@@ -36,8 +36,8 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     let config = Config::load(&args.config)?;
     std::fs::create_dir_all(&config.output)
         .with_context(|| format!("cannot create the output folder {}", config.output.display()))?;
-    crate::render::install_interrupt_handler();
-    let scenes = runs::prepare_scenes(&config)?;
+    crate::run::install_interrupt_handler();
+    let scenes = scenes::prepare_scenes(&config)?;
     let mut records = Vec::new();
     let mut references = Vec::new();
     let total = scenes.len() * config.methods.len() * config.budget.seeds.len();
@@ -58,7 +58,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
                 let job = runs::Job { config: &config, scene, method, seed, reference: &reference };
                 let record = if args.report_only {
                     job.existing()
-                } else if crate::render::CANCEL.load(Ordering::Relaxed) {
+                } else if crate::run::cancelled() {
                     None
                 } else {
                     job.existing_or_run(index, total, args.quiet)?
@@ -72,7 +72,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     runs::write_results(&config, &rows)?;
     let path = report::write(&config, &scenes, &records, &references)?;
     eprintln!("{} runs; results in {}, report {}", records.len(), config.output.display(), path.display());
-    if crate::render::CANCEL.load(Ordering::Relaxed) {
+    if crate::run::cancelled() {
         eprintln!("interrupted: finished runs are kept; run the same command again to finish the rest");
     }
     Ok(())

@@ -3,12 +3,12 @@
 //! (`reference/SCENE.json`): a changed description renders it again.
 
 use super::config::Config;
-use super::runs::{PreparedScene, parse_flags};
-use crate::render::CANCEL;
+use super::scenes::PreparedScene;
+use crate::run::Job;
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
-use tempera::integrator::{Budget, RenderControl, RenderSettings};
+use std::time::Duration;
+use tempera::integrator::{Budget, IntegratorKind, RenderSettings};
 use tempera::texture::Image;
 use tempera_image::{ColorEncoding, WriteOptions, read_image, write_image};
 
@@ -46,8 +46,8 @@ fn key(config: &Config, scene: &PreparedScene) -> serde_json::Value {
     }
     let r = &config.reference;
     serde_json::json!({
-        "method": r.method.as_deref().unwrap_or("bdpt"),
-        "args": r.args,
+        "method": r.method.unwrap_or(IntegratorKind::Bdpt),
+        "settings": r.settings,
         "spp": if r.seconds.is_none() { Some(r.spp.unwrap_or(DEFAULT_SPP)) } else { None },
         "seconds": r.seconds,
         "seed": r.seed.unwrap_or(DEFAULT_SEED),
@@ -121,29 +121,23 @@ pub fn obtain(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Ref
 
 fn render(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Reference> {
     let r = &config.reference;
-    let method = r.method.as_deref().unwrap_or("bdpt");
-    let flags = parse_flags("[reference]", method, &r.args, false)?;
-    let integrator = crate::render::build_integrator(&flags, &scene.scene, method).context("[reference]")?;
+    let method = r.method.unwrap_or(IntegratorKind::Bdpt);
+    let integrator = tempera::integrator::create(method, &r.settings, scene.scene.defaults.max_depth)
+        .map_err(|e| anyhow::anyhow!("[reference]: {e}"))?;
     let budget = match r.seconds {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),
         None => Budget::Samples(r.spp.unwrap_or(DEFAULT_SPP)),
     };
-    let film = &scene.scene.film;
-    let pixels = u64::from(film.width) * u64::from(film.height);
     let label = format!("reference for {}", scene.entry.name);
-    let bar = crate::render::progress_bar(quiet, budget, pixels, Some(&label));
     let what = match budget {
         Budget::Samples(spp) => format!("{spp} spp"),
         Budget::Time(d) => format!("{} s", d.as_secs_f64()),
     };
     eprintln!("scene '{}': rendering the reference with {method}, {what}", scene.entry.name);
-    let start = Instant::now();
-    let on_progress = |n: u64| crate::render::advance(&bar, budget, start, n);
-    let control = RenderControl::new(&CANCEL, &on_progress);
     let settings = RenderSettings { budget, seed: r.seed.unwrap_or(DEFAULT_SEED), threads: config.threads };
-    let out = integrator.render(&scene.scene, &settings, &control).map_err(anyhow::Error::msg);
-    bar.finish_and_clear();
-    let out = out.with_context(|| format!("scene '{}': reference", scene.entry.name))?;
+    let out = Job { label: Some(&label), ..Job::new(&scene.scene, integrator.as_ref(), settings, quiet) }
+        .run()
+        .with_context(|| format!("scene '{}': reference", scene.entry.name))?;
     if out.stats.cancelled {
         bail!("interrupted while rendering the reference of '{}' (nothing cached)", scene.entry.name);
     }

@@ -6,7 +6,8 @@
 
 use super::config::Config;
 use super::plot::{Series, error_vs_time};
-use super::runs::{PreparedScene, Record, Row, image_stem};
+use super::runs::{Record, Row, image_stem};
+use super::scenes::PreparedScene;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -175,43 +176,25 @@ fn chains(groups: &[(String, BTreeMap<u64, Vec<&Row>>)], last: f64) -> Vec<Chain
         }
         let nbr: Vec<f64> = rows.iter().filter_map(|r| r.neighbor_acceptance).collect();
         let first = rows[0];
-        let depths = first.stats["depths"]
-            .as_array()
-            .map(|ds| {
-                ds.iter()
-                    .filter(|d| d["mutations"].as_u64().unwrap_or(0) > 0)
-                    .map(|d| {
-                        let swaps = &d["swaps"];
-                        let extra = if swaps.is_object() {
-                            format!(
-                                "no pair {:.3}, non-identity {:.3}, main changed {:.3}",
-                                swaps["no_pair_rate"].as_f64().unwrap_or(0.0),
-                                swaps["non_identity_rate"].as_f64().unwrap_or(0.0),
-                                swaps["main_changed_rate"].as_f64().unwrap_or(0.0)
-                            )
-                        } else {
-                            String::new()
-                        };
-                        DepthRow {
-                            depth: d["depth"].to_string().trim_matches('"').to_owned(),
-                            b: d["b"].as_f64().unwrap_or(0.0),
-                            acceptance: d["acceptance"]["total"].as_f64().unwrap_or(0.0),
-                            neighbor: swaps["neighbor_acceptance"].as_f64(),
-                            ladder: d["ladder"]
-                                .as_array()
-                                .map(|l| {
-                                    l.iter()
-                                        .map(|v| format!("{:.3}", v.as_f64().unwrap_or(0.0)))
-                                        .collect::<Vec<_>>()
-                                        .join(", ")
-                                })
-                                .unwrap_or_default(),
-                            extra,
-                        }
-                    })
-                    .collect()
+        let depths = first
+            .stats
+            .depths
+            .iter()
+            .filter(|d| d.mutations > 0)
+            .map(|d| DepthRow {
+                depth: d.depth.to_string(),
+                b: d.b,
+                acceptance: d.acceptance.total,
+                neighbor: d.swaps.as_ref().map(|s| s.neighbor_acceptance),
+                ladder: d.ladder.iter().map(|v| format!("{v:.3}")).collect::<Vec<_>>().join(", "),
+                extra: d.swaps.as_ref().map_or_else(String::new, |s| {
+                    format!(
+                        "no pair {:.3}, non-identity {:.3}, main changed {:.3}",
+                        s.no_pair_rate, s.non_identity_rate, s.main_changed_rate
+                    )
+                }),
             })
-            .unwrap_or_default();
+            .collect();
         out.push(ChainRow {
             method: method.clone(),
             acceptance: Some(mean(&acc)),
@@ -364,7 +347,7 @@ pub fn write(
     let methods: Vec<serde_json::Value> = config
         .methods
         .iter()
-        .map(|m| serde_json::json!({"name": m.name, "integrator": m.integrator, "args": m.args.join(" ")}))
+        .map(|m| serde_json::json!({"name": m.name, "integrator": m.integrator, "args": m.describe()}))
         .collect();
     let html = env
         .get_template("report.html")

@@ -1,104 +1,19 @@
-//! The runs of an experiment: scenes loaded once, methods parsed from `tempera render` flags,
-//! and one render per (scene, method, seed) whose images at every recorded time are compared
-//! with the reference.
+//! The runs of an experiment: one render per (scene, method, seed) whose images at every
+//! recorded time are compared with the reference.
 
-use super::config::{Config, Method, SceneEntry};
+use super::config::Config;
 use super::reference::Reference;
-use crate::render::{CANCEL, RenderArgs};
-use anyhow::{Context, Result, bail};
-use clap::Parser;
+use super::scenes::{PreparedMethod, PreparedScene};
+use crate::run::Job as RenderJob;
+use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::time::{Duration, Instant};
-use tempera::integrator::{Budget, Integrator, RenderControl, RenderOutput, RenderSettings};
+use std::time::Duration;
+use tempera::integrator::{Budget, RenderOutput, RenderSettings, RunStats};
 use tempera::mcmc::DepthStats;
 use tempera_image::metrics;
 use tempera_image::{WriteOptions, write_image};
-
-/// `tempera render` flags of a method or the reference, parsed as the command line would.
-#[derive(Parser, Debug)]
-#[command(no_binary_name = true, name = "method flags")]
-struct Flags {
-    #[command(flatten)]
-    render: RenderArgs,
-}
-
-/// A method ready to render.
-pub struct PreparedMethod {
-    pub method: Method,
-    pub integrator: Box<dyn Integrator>,
-}
-
-/// A scene loaded once for all its runs.
-pub struct PreparedScene {
-    pub entry: SceneEntry,
-    pub scene: tempera::scene::Scene,
-    pub methods: Vec<PreparedMethod>,
-}
-
-/// Parses `args` as `tempera render` flags for integrator `integrator`, refusing the flags
-/// the experiment sets itself.
-pub fn parse_flags(what: &str, integrator: &str, args: &[String], allow_spp: bool) -> Result<RenderArgs> {
-    let mut all = vec!["--integrator".to_owned(), integrator.to_owned()];
-    all.extend(args.iter().cloned());
-    let flags =
-        Flags::try_parse_from(&all).map_err(|e| anyhow::anyhow!("{what}: {}", e.render().to_string().trim()))?;
-    let r = flags.render;
-    let owned = [
-        (r.scene.is_some(), "a scene file (give it in [[scene]])"),
-        (r.time.is_some(), "--time (the experiment's [budget] sets it)"),
-        (r.mpp.is_some() || (r.spp.is_some() && !allow_spp), "--spp/--mpp (runs are equal-time)"),
-        (r.seed != 0, "--seed (the experiment's [budget] seeds set it)"),
-        (!r.output.is_empty() || r.stats.is_some(), "-o/--stats (the experiment writes its own files)"),
-        (r.resolution.is_some() || r.maxdepth.is_some(), "--resolution/--maxdepth (set them per [[scene]])"),
-        (r.threads != 0, "--threads (set `threads` at the top of the file)"),
-        (r.strategy_images.is_some(), "--strategy-images"),
-    ];
-    if let Some((_, flag)) = owned.iter().find(|(set, _)| *set) {
-        bail!("{what}: the method's args may not set {flag}");
-    }
-    Ok(r)
-}
-
-/// Loads every scene (skipping optional ones whose file is missing) and builds every method
-/// for it, so that a mistake in any of them stops the experiment before the first render.
-pub fn prepare_scenes(config: &Config) -> Result<Vec<PreparedScene>> {
-    let mut scenes = Vec::new();
-    for entry in &config.scenes {
-        if let Some(file) = &entry.file
-            && !file.exists()
-        {
-            if entry.optional {
-                eprintln!("scene '{}': {} does not exist; skipped (optional)", entry.name, file.display());
-                continue;
-            }
-            bail!("scene '{}': {} does not exist", entry.name, file.display());
-        }
-        let loaded =
-            crate::scene::load(entry.file.as_deref(), false).with_context(|| format!("scene '{}'", entry.name))?;
-        if !loaded.warnings.is_empty() {
-            eprintln!("scene '{}': {} loader warnings (see `tempera info`)", entry.name, loaded.warnings.len());
-        }
-        let mut scene = loaded.scene;
-        if let Some(r) = &entry.resolution {
-            let (w, h) = crate::render::parse_resolution(r).map_err(anyhow::Error::msg)?;
-            scene.set_resolution(w, h);
-        }
-        if let Some(d) = entry.maxdepth {
-            scene.defaults.max_depth = d;
-        }
-        let mut methods = Vec::new();
-        for method in &config.methods {
-            let what = format!("method '{}'", method.name);
-            let flags = parse_flags(&what, &method.integrator, &method.args, false)?;
-            let integrator = crate::render::build_integrator(&flags, &scene, &method.integrator).context(what)?;
-            methods.push(PreparedMethod { method: method.clone(), integrator });
-        }
-        scenes.push(PreparedScene { entry: entry.clone(), scene, methods });
-    }
-    Ok(scenes)
-}
 
 /// One line of results: a run's image at one time, compared with the reference.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -125,7 +40,7 @@ pub struct Row {
     /// The image files of this row (relative to the output folder), when it was a budget.
     pub image: Option<String>,
     /// The render statistics, as `tempera render --stats` writes them.
-    pub stats: serde_json::Value,
+    pub stats: RunStats,
 }
 
 /// A finished run: what it was and its rows.
@@ -182,7 +97,7 @@ impl Job<'_> {
         serde_json::json!({
             "tempera": env!("CARGO_PKG_VERSION"),
             "integrator": self.method.method.integrator,
-            "args": self.method.method.args,
+            "settings": self.method.method.settings,
             "scene_file": self.scene.entry.file.as_ref().map(|p| p.display().to_string()),
             "resolution": [film.width, film.height],
             "maxdepth": self.scene.scene.defaults.max_depth,
@@ -234,17 +149,16 @@ impl Job<'_> {
             taken.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push((i, out.clone()));
         };
         let budget = Budget::Time(Duration::from_secs_f64(longest));
-        let film = &self.scene.scene.film;
-        let pixels = u64::from(film.width) * u64::from(film.height);
-        let bar = crate::render::progress_bar(quiet, budget, pixels, Some(label));
-        let start = Instant::now();
-        let on_progress = |n: u64| crate::render::advance(&bar, budget, start, n);
-        let control = RenderControl::new(&CANCEL, &on_progress).with_snapshots(&snapshot_times, &on_snapshot);
         let settings = RenderSettings { budget, seed: self.seed, threads: self.config.threads };
         let integrator = self.method.integrator.as_ref();
-        let out = integrator.render(&self.scene.scene, &settings, &control).map_err(anyhow::Error::msg);
-        bar.finish_and_clear();
-        let out = out.with_context(|| label.to_owned())?;
+        let out = RenderJob {
+            label: Some(label),
+            snapshots: &snapshot_times,
+            on_snapshot: &on_snapshot,
+            ..RenderJob::new(&self.scene.scene, integrator, settings, quiet)
+        }
+        .run()
+        .with_context(|| label.to_owned())?;
         if out.stats.cancelled {
             eprintln!("{label}: interrupted; not recorded");
             return Ok(None);
@@ -279,7 +193,7 @@ impl Job<'_> {
             acceptance: acceptance(&all),
             neighbor_acceptance: neighbor_acceptance(&all),
             image,
-            stats: crate::stats::to_json(integrator, out),
+            stats: RunStats::new(integrator, out),
         })
     }
 

@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use tempera::camera::{CameraDesc, FovAxis};
 use tempera::film::{FilmDesc, Filter};
+use tempera::integrator::IntegratorKind;
 use tempera::math::{Mat4, Vec3};
 use tempera::scene::{PrototypeId, RenderDefaults, SceneBuilder};
 use tempera::texture::{Image, Texture};
@@ -211,11 +212,11 @@ impl Loader {
         let depth = props.int(ctx, "maxDepth", -1)?;
         self.defaults.max_depth = if depth < 0 { 1000 } else { (depth - 1).max(0) as u32 };
         self.info.integrator = Some(ty.clone());
-        self.defaults.integrator = Some(match ty.as_str() {
-            "path" | "volpath" | "volpath_simple" | "direct" => "path".to_owned(),
-            "mlt" | "pssmlt" => "pssmlt".to_owned(),
-            other => other.to_owned(),
-        });
+        self.defaults.integrator = match ty.as_str() {
+            "path" | "volpath" | "volpath_simple" | "direct" => Some(IntegratorKind::Path),
+            "mlt" | "pssmlt" => Some(IntegratorKind::Pssmlt),
+            other => IntegratorKind::from_name(other),
+        };
         for quiet in [
             "strictNormals",
             "hideEmitters",

@@ -9,6 +9,7 @@ use crate::LoadError;
 use crate::diagnostics::Loc;
 use tempera::camera::CameraDesc;
 use tempera::film::Filter;
+use tempera::integrator::IntegratorKind;
 use tempera::math::{Mat4, Vec3};
 
 /// Reads a quoted-string argument.
@@ -331,7 +332,7 @@ impl Loader {
         self.film.width = w as u32;
         self.film.height = h as u32;
         if let Some(name) = params.string("filename")? {
-            self.defaults.output = Some(name.to_owned());
+            self.defaults.output = Some(name.into());
         }
         self.report_unused(&params, &format!("Film \"{ty}\""))
     }
@@ -356,11 +357,11 @@ impl Loader {
         }
         self.defaults.max_depth = depth as u32;
         self.info.integrator = Some(ty.clone());
-        self.defaults.integrator = Some(match ty.as_str() {
-            "path" | "volpath" => "path".to_owned(),
-            "mlt" => "mmlt".to_owned(),
-            other => other.to_owned(),
-        });
+        self.defaults.integrator = match ty.as_str() {
+            "path" | "volpath" => Some(IntegratorKind::Path),
+            "mlt" => Some(IntegratorKind::Mmlt),
+            other => IntegratorKind::from_name(other),
+        };
         self.report_unused(&params, &format!("Integrator \"{ty}\""))
     }
 

@@ -6,7 +6,10 @@
 use super::vertex::Vertex;
 use crate::scene::Scene;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// The MIS heuristic (Veach 1997 §9.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
 pub enum Heuristic {
     #[default]
     Power,

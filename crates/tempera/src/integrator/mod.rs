@@ -7,6 +7,8 @@ pub mod mmlt;
 pub mod path;
 pub mod pssmlt;
 pub(crate) mod render_loop;
+pub mod run_stats;
+pub mod settings;
 pub mod tempered;
 pub mod tiles;
 
@@ -17,7 +19,9 @@ pub use bdpt::{BdptIntegrator, Strategies};
 pub use mmlt::MmltIntegrator;
 pub use path::PathIntegrator;
 pub use pssmlt::PssmltIntegrator;
-pub use tempered::{Swap, TemperedIntegrator};
+pub use run_stats::RunStats;
+pub use settings::{IntegratorKind, IntegratorSettings, Swap, TemperedMis, create};
+pub use tempered::TemperedIntegrator;
 
 use crate::scene::Scene;
 use crate::texture::Image;
@@ -104,89 +108,4 @@ pub trait Integrator: Send + Sync {
     /// which no light path reaches the camera).
     fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl)
     -> Result<RenderOutput, String>;
-}
-
-/// Names accepted by [`create`].
-pub const INTEGRATORS: &[&str] = &["path", "bdpt", "mmlt", "pssmlt", "tempered"];
-
-/// Options shared by the integrators [`create`] makes.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct IntegratorOptions {
-    /// Maximum number of scattering events per path (pbrt's `maxdepth`).
-    pub max_depth: u32,
-    /// BDPT: also produce one image per strategy.
-    pub strategy_images: bool,
-    /// BDPT: the MIS heuristic.
-    pub heuristic: crate::bidir::Heuristic,
-    /// MMLT and PSSMLT: bootstrap samples and chains (per depth for MMLT) and the large-step
-    /// probability (`None` or 0 samples and chains keep the integrator's defaults).
-    pub bootstrap: usize,
-    pub chains: usize,
-    pub large_step: Option<f32>,
-    /// Tempered MMLT: replicas per ensemble (0: the default), swap strategy, fixed ladder
-    /// `a_1 … a_{K−1}` (empty: the default) and whether MIS weights use the roughened densities.
-    pub replicas: usize,
-    pub swap: Swap,
-    pub ladder: Vec<f32>,
-    pub roughen_mis: Option<bool>,
-    /// Tempered MMLT: burn-in sweeps that tune the ladder and the acceptance they aim at
-    /// (`None`: the integrator's defaults).
-    pub burn_in: Option<u64>,
-    pub swap_target: Option<f64>,
-    /// Tempered MMLT: every replica contributes to the image (`None`: the default).
-    pub reuse_replicas: Option<bool>,
-    /// Tempered MMLT: sweeps between swap steps (`None`: the default).
-    pub swap_every: Option<u64>,
-}
-
-/// The integrator called `name`.
-pub fn create(name: &str, options: &IntegratorOptions) -> Option<Box<dyn Integrator>> {
-    let d = options.max_depth;
-    // Chain options: a count of 0 or an absent probability keeps the integrator's default.
-    let count = |v: usize, default: usize| if v > 0 { v } else { default };
-    let (bootstrap, chains, large_step) = (options.bootstrap, options.chains, options.large_step);
-    match name {
-        "path" => Some(Box::new(PathIntegrator::new(d))),
-        "mmlt" => {
-            let m = MmltIntegrator::new(d);
-            Some(Box::new(MmltIntegrator {
-                bootstrap: count(bootstrap, m.bootstrap),
-                chains: count(chains, m.chains),
-                large_step_probability: large_step.unwrap_or(m.large_step_probability),
-                ..m
-            }))
-        }
-        "tempered" => {
-            let m = TemperedIntegrator::new(d);
-            Some(Box::new(TemperedIntegrator {
-                bootstrap: count(bootstrap, m.bootstrap),
-                chains: count(chains, m.chains),
-                large_step_probability: large_step.unwrap_or(m.large_step_probability),
-                replicas: count(options.replicas, m.replicas),
-                swap: options.swap,
-                ladder: options.ladder.clone(),
-                roughen_mis: options.roughen_mis.unwrap_or(m.roughen_mis),
-                burn_in: options.burn_in.unwrap_or(m.burn_in),
-                swap_target: options.swap_target.unwrap_or(m.swap_target),
-                reuse_replicas: options.reuse_replicas.unwrap_or(m.reuse_replicas),
-                swap_every: options.swap_every.unwrap_or(m.swap_every),
-                ..m
-            }))
-        }
-        "pssmlt" => {
-            let m = PssmltIntegrator::new(d);
-            Some(Box::new(PssmltIntegrator {
-                bootstrap: count(bootstrap, m.bootstrap),
-                chains: count(chains, m.chains),
-                large_step_probability: large_step.unwrap_or(m.large_step_probability),
-                ..m
-            }))
-        }
-        "bdpt" => Some(Box::new(BdptIntegrator {
-            strategy_images: options.strategy_images,
-            heuristic: options.heuristic,
-            ..BdptIntegrator::new(d)
-        })),
-        _ => None,
-    }
 }

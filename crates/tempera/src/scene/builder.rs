@@ -35,10 +35,11 @@ pub struct AreaEmission {
 pub struct RenderDefaults {
     pub spp: u32,
     pub max_depth: u32,
-    /// The integrator the scene asks for, in Tempera's names.
-    pub integrator: Option<String>,
-    /// The output file name the scene asks for.
-    pub output: Option<String>,
+    /// The integrator the scene asks for, when Tempera has it (the loader's information keeps
+    /// the name as written).
+    pub integrator: Option<crate::integrator::IntegratorKind>,
+    /// The output file the scene asks for.
+    pub output: Option<std::path::PathBuf>,
 }
 
 impl Default for RenderDefaults {

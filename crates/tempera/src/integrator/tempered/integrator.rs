@@ -4,32 +4,10 @@
 
 use super::{Ensemble, EnsembleSettings, EquiEnergy, Neighbor, Permutation, Replicas, SwapKernel, Tuning};
 use crate::bidir::{Heuristic, Tempering};
-use crate::integrator::{Integrator, RenderControl, RenderOutput, RenderSettings};
+use crate::integrator::{Integrator, RenderControl, RenderOutput, RenderSettings, Swap};
 use crate::math::rng::{Pcg32, hash};
 use crate::mcmc::{ChainSettings, StartContext, TemperedTarget};
 use crate::scene::Scene;
-
-/// Which swap strategy the ensembles use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Swap {
-    #[default]
-    Neighbor,
-    EquiEnergy,
-    Permutation,
-}
-
-impl Swap {
-    pub const NAMES: &[&str] = &["neighbor", "equi-energy", "permutation"];
-
-    pub fn parse(name: &str) -> Option<Swap> {
-        match name {
-            "neighbor" => Some(Swap::Neighbor),
-            "equi-energy" => Some(Swap::EquiEnergy),
-            "permutation" => Some(Swap::Permutation),
-            _ => None,
-        }
-    }
-}
 
 /// Rings of the equi-energy strategy.
 const RINGS: usize = 8;

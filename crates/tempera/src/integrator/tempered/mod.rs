@@ -29,7 +29,7 @@ mod tests;
 
 pub use ensemble::{Ensemble, EnsembleGroup, EnsembleSettings};
 pub use equi_energy::EquiEnergy;
-pub use integrator::{Swap, TemperedIntegrator};
+pub use integrator::TemperedIntegrator;
 pub use ladder::{Ladder, Tuning};
 pub use neighbor::Neighbor;
 pub use permutation::Permutation;

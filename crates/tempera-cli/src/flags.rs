@@ -1,0 +1,124 @@
+//! Command-line flags that describe a render, and the parsers behind them. The integrator's
+//! flags build the core's typed [`IntegratorSettings`], the same type an experiment file's
+//! methods deserialise into, so both are checked by the same code.
+
+use clap::Args;
+use tempera::bidir::Heuristic;
+use tempera::integrator::{IntegratorSettings, Swap, TemperedMis};
+
+/// The flags of `tempera render` that set up the integrator.
+#[derive(Args, Debug, Default)]
+pub struct IntegratorFlags {
+    /// Maximum number of scattering events per path (pbrt's maxdepth; default: the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=100_000))]
+    pub maxdepth: Option<u32>,
+    /// BDPT: multiple importance sampling heuristic (default: power).
+    #[arg(long, value_enum)]
+    pub mis: Option<Heuristic>,
+    /// Markov-chain integrators: bootstrap samples (per path depth for MMLT).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    pub bootstrap: Option<u64>,
+    /// Markov-chain integrators: independent chains (per path depth for MMLT).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub chains: Option<u64>,
+    /// Markov-chain integrators: probability of a large step.
+    #[arg(long, value_parser = parse_probability)]
+    pub large_step: Option<f32>,
+    /// Tempered MMLT: replicas per ensemble (default 5; 1 is plain MMLT).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=32))]
+    pub replicas: Option<u64>,
+    /// Tempered MMLT: how replicas exchange states (default: neighbor).
+    #[arg(long, value_enum)]
+    pub swap: Option<Swap>,
+    /// Tempered MMLT: fixed roughening ladder a1,a2,… of replicas 1 … K−1 (increasing, positive).
+    #[arg(long, value_parser = parse_ladder)]
+    pub ladder: Option<Ladder>,
+    /// Tempered MMLT: burn-in sweeps that tune each depth's shared ladder (0: keep the
+    /// default ladder untuned; ignored with --ladder).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=10_000_000))]
+    pub burn_in: Option<u64>,
+    /// Tempered MMLT: neighbour-swap acceptance the ladder tuning aims at.
+    #[arg(long, value_parser = parse_probability)]
+    pub swap_target: Option<f32>,
+    /// Tempered MMLT: MIS weights of tempered replicas from the original (default) or the
+    /// roughened densities.
+    #[arg(long, value_enum)]
+    pub tempered_mis: Option<TemperedMis>,
+    /// Tempered MMLT: every replica contributes to the image, weighted by the balance heuristic
+    /// over the replicas' normalised targets (the default).
+    #[arg(long, overrides_with = "no_reuse_replicas")]
+    pub reuse_replicas: bool,
+    /// Tempered MMLT: replica 0 alone writes the image (as in Šik & Křivánek 2016).
+    #[arg(long, overrides_with = "reuse_replicas")]
+    pub no_reuse_replicas: bool,
+    /// Tempered MMLT: sweeps (one mutation per replica) between swap steps.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub swap_every: Option<u64>,
+}
+
+impl IntegratorFlags {
+    /// The typed settings these flags give (`strategy_images`: BDPT's per-strategy images
+    /// are asked for).
+    pub fn settings(&self, strategy_images: bool) -> IntegratorSettings {
+        IntegratorSettings {
+            maxdepth: self.maxdepth,
+            mis: self.mis,
+            strategy_images,
+            bootstrap: self.bootstrap.map(|v| v as usize),
+            chains: self.chains.map(|v| v as usize),
+            large_step: self.large_step,
+            replicas: self.replicas.map(|v| v as usize),
+            swap: self.swap,
+            ladder: self.ladder.as_ref().map(|l| l.0.clone()),
+            tempered_mis: self.tempered_mis,
+            burn_in: self.burn_in,
+            swap_target: self.swap_target.map(f64::from),
+            reuse_replicas: match (self.reuse_replicas, self.no_reuse_replicas) {
+                (true, _) => Some(true),
+                (_, true) => Some(false),
+                _ => None,
+            },
+            swap_every: self.swap_every,
+        }
+    }
+}
+
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("expected a positive number of seconds, got '{s}'")),
+    }
+}
+
+fn parse_probability(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
+        _ => Err(format!("expected a probability in (0, 1], got '{s}'")),
+    }
+}
+
+/// A roughening ladder from the command line.
+#[derive(Clone, Debug)]
+pub struct Ladder(pub Vec<f32>);
+
+fn parse_ladder(s: &str) -> Result<Ladder, String> {
+    let values: Result<Vec<f32>, _> = s.split(',').map(|v| v.trim().parse::<f32>()).collect();
+    let values = values.map_err(|_| format!("expected comma-separated numbers such as 0.02,0.06,0.18, got '{s}'"))?;
+    if values.is_empty() || values.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 10.0) {
+        return Err(format!("ladder values must lie in (0, 10], got '{s}'"));
+    }
+    if values.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(format!("ladder values must increase, got '{s}'"));
+    }
+    Ok(Ladder(values))
+}
+
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let err = || format!("expected WIDTHxHEIGHT such as 640x480, got '{s}'");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(err)?;
+    let (w, h): (u32, u32) = (w.trim().parse().map_err(|_| err())?, h.trim().parse().map_err(|_| err())?);
+    if w == 0 || h == 0 || w > 65_536 || h > 65_536 {
+        return Err(format!("resolution must be between 1x1 and 65536x65536, got '{s}'"));
+    }
+    Ok((w, h))
+}

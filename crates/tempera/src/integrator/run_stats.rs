@@ -1,0 +1,216 @@
+//! A render's statistics as people and programs read them: what `tempera render --stats`
+//! writes, what an experiment records per run and what its report reads back. The keys are
+//! documented in the README.
+
+use super::RenderOutput;
+use crate::mcmc::{DepthStats, SwapStats};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+/// The statistics of one render.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunStats {
+    pub integrator: String,
+    pub seconds: f64,
+    /// Pixel samples (per-pixel integrators) or main-chain mutations (Markov chains).
+    pub samples: u64,
+    pub rays: u64,
+    pub rays_per_second: f64,
+    pub invalid_samples: u64,
+    pub cancelled: bool,
+    pub mutations: u64,
+    pub mutations_per_second: f64,
+    /// Per path depth (or one row for all, PSSMLT): the Markov chains' statistics.
+    pub depths: Vec<DepthRecord>,
+}
+
+/// Which depths a row covers: one, or all (PSSMLT's single set of chains), written `"all"`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Depth {
+    At(usize),
+    #[default]
+    All,
+}
+
+impl std::fmt::Display for Depth {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Depth::At(k) => f.pad(&k.to_string()),
+            Depth::All => f.pad("all"),
+        }
+    }
+}
+
+impl Serialize for Depth {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Depth::At(k) => s.serialize_u64(*k as u64),
+            Depth::All => s.serialize_str("all"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Depth {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            At(usize),
+            Name(String),
+        }
+        match Raw::deserialize(d)? {
+            Raw::At(k) => Ok(Depth::At(k)),
+            Raw::Name(n) if n == "all" => Ok(Depth::All),
+            Raw::Name(n) => Err(serde::de::Error::custom(format!("expected a depth or \"all\", got \"{n}\""))),
+        }
+    }
+}
+
+/// Acceptance rates of one depth's chains.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Acceptance {
+    pub total: f64,
+    pub large_step: f64,
+    pub small_step: f64,
+    /// Accepted proposals that changed the technique, per proposal.
+    pub technique_change: f64,
+}
+
+/// What the chains of one depth did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DepthRecord {
+    pub depth: Depth,
+    pub b: f64,
+    pub b_rel_se: f64,
+    pub bootstrap_samples: u64,
+    pub large_step_samples: u64,
+    pub mutations: u64,
+    pub acceptance: Acceptance,
+    pub invalid: u64,
+    pub seconds: f64,
+    /// Tempered MMLT: the roughening ladder.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ladder: Vec<f64>,
+    /// Tempered MMLT with reuse: the weights' ratios `ρ_l ≈ b_l/b_0`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub replica_b_ratios: Vec<f64>,
+    /// Tempered MMLT with reuse: each replica's refined `b_l`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub replica_b: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub swaps: Option<SwapRecord>,
+}
+
+/// Attempts and acceptances of one replica pair.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PairRecord {
+    pub pair: [usize; 2],
+    pub attempts: u64,
+    pub accepted: u64,
+}
+
+/// What the swap steps of one depth did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SwapRecord {
+    pub steps: u64,
+    /// Neighbouring pairs always, other pairs when attempted.
+    pub swap_pairs: Vec<PairRecord>,
+    pub neighbor_acceptance: f64,
+    /// Equi-energy steps without two replicas in a ring.
+    pub no_pair_rate: f64,
+    /// Permutation steps other than the identity, and that gave replica 0 a new state.
+    pub non_identity_rate: f64,
+    pub main_changed_rate: f64,
+}
+
+fn rate(accepted: u64, proposed: u64) -> f64 {
+    if proposed == 0 { 0.0 } else { accepted as f64 / proposed as f64 }
+}
+
+/// The shortest decimal form of each `f32` (0.02, not 0.019999999552965164).
+fn shortest(values: &[f32]) -> Vec<f64> {
+    values.iter().map(|a| a.to_string().parse().unwrap_or(f64::from(*a))).collect()
+}
+
+impl SwapRecord {
+    pub fn new(s: &SwapStats) -> Self {
+        let k = s.replicas;
+        let mut swap_pairs = Vec::new();
+        for i in 0..k {
+            for j in i + 1..k {
+                let (attempts, accepted) = (s.attempts[i * k + j], s.accepted[i * k + j]);
+                if attempts > 0 || j == i + 1 {
+                    swap_pairs.push(PairRecord { pair: [i, j], attempts, accepted });
+                }
+            }
+        }
+        Self {
+            steps: s.steps,
+            swap_pairs,
+            neighbor_acceptance: s.neighbor_acceptance(),
+            no_pair_rate: rate(s.no_pair, s.steps),
+            non_identity_rate: rate(s.non_identity, s.steps),
+            main_changed_rate: rate(s.main_changed, s.steps),
+        }
+    }
+}
+
+impl DepthRecord {
+    pub fn new(d: &DepthStats) -> Self {
+        let proposed = d.large_steps_proposed + d.small_steps_proposed;
+        Self {
+            depth: if d.all_depths { Depth::All } else { Depth::At(d.depth) },
+            b: d.b,
+            b_rel_se: d.b_rel_se,
+            bootstrap_samples: d.bootstrap_samples,
+            large_step_samples: d.large_step_samples,
+            mutations: d.mutations,
+            acceptance: Acceptance {
+                total: d.acceptance(),
+                large_step: rate(d.large_steps_accepted, d.large_steps_proposed),
+                small_step: rate(d.small_steps_accepted, d.small_steps_proposed),
+                technique_change: rate(d.technique_changes, proposed),
+            },
+            invalid: d.invalid,
+            seconds: d.seconds,
+            ladder: shortest(&d.ladder),
+            replica_b_ratios: shortest(&d.replica_b_ratios),
+            replica_b: d.replica_b.clone(),
+            swaps: d.swaps.as_ref().map(SwapRecord::new),
+        }
+    }
+}
+
+impl RunStats {
+    /// The statistics of `out`, rendered by `integrator`.
+    pub fn new(integrator: &str, out: &RenderOutput) -> Self {
+        let s = &out.stats;
+        let mutations: u64 = out.chains.iter().map(|d| d.mutations).sum();
+        Self {
+            integrator: integrator.to_owned(),
+            seconds: s.seconds,
+            samples: s.pixel_samples,
+            rays: s.rays,
+            rays_per_second: s.rays as f64 / s.seconds.max(1e-9),
+            invalid_samples: s.invalid_samples,
+            cancelled: s.cancelled,
+            mutations,
+            mutations_per_second: mutations as f64 / s.seconds.max(1e-9),
+            depths: out.chains.iter().map(DepthRecord::new).collect(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depth_labels_round_trip() {
+        for d in [Depth::At(3), Depth::All] {
+            let text = serde_json::to_string(&d).unwrap();
+            assert_eq!(serde_json::from_str::<Depth>(&text).unwrap(), d);
+        }
+        assert_eq!(serde_json::to_string(&Depth::All).unwrap(), "\"all\"");
+        assert!(serde_json::from_str::<Depth>("\"some\"").is_err());
+    }
+}

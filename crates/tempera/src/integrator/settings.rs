@@ -1,0 +1,297 @@
+//! Typed integrator settings, one type for every front end: `tempera render`'s flags and an
+//! experiment file's methods build the same [`IntegratorSettings`], which [`create`] checks and
+//! turns into an integrator. Every setting is optional; an absent one keeps the integrator's
+//! default (or, for `maxdepth`, the scene's).
+
+use super::{BdptIntegrator, Integrator, MmltIntegrator, PathIntegrator, PssmltIntegrator, TemperedIntegrator};
+use crate::bidir::Heuristic;
+use crate::integrator::tempered::Permutation;
+use serde::{Deserialize, Serialize};
+
+/// The light-transport algorithms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum IntegratorKind {
+    Path,
+    Bdpt,
+    Mmlt,
+    Pssmlt,
+    Tempered,
+}
+
+impl IntegratorKind {
+    pub const ALL: [IntegratorKind; 5] = [
+        IntegratorKind::Path,
+        IntegratorKind::Bdpt,
+        IntegratorKind::Mmlt,
+        IntegratorKind::Pssmlt,
+        IntegratorKind::Tempered,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Path => "path",
+            IntegratorKind::Bdpt => "bdpt",
+            IntegratorKind::Mmlt => "mmlt",
+            IntegratorKind::Pssmlt => "pssmlt",
+            IntegratorKind::Tempered => "tempered",
+        }
+    }
+
+    /// The integrator called `name` (Tempera's names, as [`Self::name`] gives them).
+    pub fn from_name(name: &str) -> Option<IntegratorKind> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// Markov-chain integrators (budgets in mutations per pixel, per-depth statistics).
+    pub fn is_chain(self) -> bool {
+        matches!(self, IntegratorKind::Mmlt | IntegratorKind::Pssmlt | IntegratorKind::Tempered)
+    }
+}
+
+impl std::fmt::Display for IntegratorKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Which swap strategy tempered ensembles use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Swap {
+    #[default]
+    Neighbor,
+    EquiEnergy,
+    Permutation,
+}
+
+/// Which densities the MIS weights inside tempered targets use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum TemperedMis {
+    /// The scene's own (untempered) densities.
+    #[default]
+    Original,
+    /// The roughened densities.
+    Roughened,
+}
+
+/// The settings of any integrator (those another integrator has are refused by [`create`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IntegratorSettings {
+    /// Maximum number of scattering events per path (pbrt's `maxdepth`; absent: the scene's).
+    pub maxdepth: Option<u32>,
+    /// BDPT: the MIS heuristic.
+    pub mis: Option<Heuristic>,
+    /// BDPT: also produce one image per strategy (an output option, not a setting of files).
+    #[serde(skip)]
+    pub strategy_images: bool,
+    /// Markov-chain integrators: bootstrap samples (per depth for MMLT).
+    pub bootstrap: Option<usize>,
+    /// Markov-chain integrators: independent chains (per depth for MMLT).
+    pub chains: Option<usize>,
+    /// Markov-chain integrators: the probability of a large step.
+    pub large_step: Option<f32>,
+    /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
+    pub replicas: Option<usize>,
+    /// Tempered MMLT: how replicas exchange states.
+    pub swap: Option<Swap>,
+    /// Tempered MMLT: a fixed roughening ladder `a_1 … a_{K−1}` (increasing, positive).
+    pub ladder: Option<Vec<f32>>,
+    /// Tempered MMLT: which densities the tempered targets' MIS weights use.
+    pub tempered_mis: Option<TemperedMis>,
+    /// Tempered MMLT: burn-in sweeps that tune each depth's ladder (0: no tuning).
+    pub burn_in: Option<u64>,
+    /// Tempered MMLT: the neighbour-swap acceptance the tuning aims at.
+    pub swap_target: Option<f64>,
+    /// Tempered MMLT: every replica contributes to the image.
+    pub reuse_replicas: Option<bool>,
+    /// Tempered MMLT: sweeps between swap steps.
+    pub swap_every: Option<u64>,
+}
+
+fn check_range<T: PartialOrd + std::fmt::Display>(
+    name: &str,
+    value: Option<T>,
+    range: std::ops::RangeInclusive<T>,
+) -> Result<(), String> {
+    match value {
+        Some(v) if !range.contains(&v) => {
+            Err(format!("{name} must lie in [{}, {}], not {v}", range.start(), range.end()))
+        }
+        _ => Ok(()),
+    }
+}
+
+fn check_probability(name: &str, value: Option<f64>) -> Result<(), String> {
+    match value {
+        Some(p) if !(p > 0.0 && p <= 1.0) => Err(format!("{name} must be a probability in (0, 1], not {p}")),
+        _ => Ok(()),
+    }
+}
+
+impl IntegratorSettings {
+    /// The settings given that `kind` does not have, by name.
+    fn foreign(&self, kind: IntegratorKind) -> Vec<&'static str> {
+        use IntegratorKind::*;
+        let chain = kind.is_chain();
+        let tempered = kind == Tempered;
+        let given = [
+            ("mis", self.mis.is_some(), kind == Bdpt),
+            ("strategy_images", self.strategy_images, kind == Bdpt),
+            ("bootstrap", self.bootstrap.is_some(), chain),
+            ("chains", self.chains.is_some(), chain),
+            ("large_step", self.large_step.is_some(), chain),
+            ("replicas", self.replicas.is_some(), tempered),
+            ("swap", self.swap.is_some(), tempered),
+            ("ladder", self.ladder.is_some(), tempered),
+            ("tempered_mis", self.tempered_mis.is_some(), tempered),
+            ("burn_in", self.burn_in.is_some(), tempered),
+            ("swap_target", self.swap_target.is_some(), tempered),
+            ("reuse_replicas", self.reuse_replicas.is_some(), tempered),
+            ("swap_every", self.swap_every.is_some(), tempered),
+        ];
+        given.iter().filter(|(_, set, applies)| *set && !applies).map(|(name, ..)| *name).collect()
+    }
+
+    /// Checks every setting's range and the settings' agreement with each other and with
+    /// `kind`; the error names the setting.
+    pub fn validate(&self, kind: IntegratorKind) -> Result<(), String> {
+        if let Some(name) = self.foreign(kind).first() {
+            return Err(format!("{name} is not a setting of the {kind} integrator"));
+        }
+        check_range("maxdepth", self.maxdepth, 0..=100_000)?;
+        check_range("bootstrap", self.bootstrap, 1..=100_000_000)?;
+        check_range("chains", self.chains, 1..=1_000_000)?;
+        check_probability("large_step", self.large_step.map(f64::from))?;
+        check_range("replicas", self.replicas, 1..=32)?;
+        check_range("burn_in", self.burn_in, 0..=10_000_000)?;
+        check_probability("swap_target", self.swap_target)?;
+        check_range("swap_every", self.swap_every, 1..=1_000_000)?;
+        if let Some(ladder) = &self.ladder {
+            if ladder.is_empty() || ladder.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 10.0) {
+                return Err(format!("ladder values must lie in (0, 10], not {ladder:?}"));
+            }
+            if ladder.windows(2).any(|w| w[1] <= w[0]) {
+                return Err(format!("ladder values must increase, not {ladder:?}"));
+            }
+            // A ladder fixes the number of replicas; both given must agree.
+            if let Some(r) = self.replicas
+                && r != ladder.len() + 1
+            {
+                return Err(format!(
+                    "the ladder gives {} values, so replicas must be {} (it is {r})",
+                    ladder.len(),
+                    ladder.len() + 1
+                ));
+            }
+        }
+        if self.swap == Some(Swap::Permutation) && self.replica_count() > Some(Permutation::MAX_REPLICAS) {
+            return Err(format!(
+                "the permutation swap enumerates all K! permutations: use at most {} replicas",
+                Permutation::MAX_REPLICAS
+            ));
+        }
+        Ok(())
+    }
+
+    /// The replicas the settings ask for, if they say.
+    fn replica_count(&self) -> Option<usize> {
+        self.replicas.or(self.ladder.as_ref().map(|l| l.len() + 1))
+    }
+}
+
+/// The integrator `kind` with `settings` (checked first), paths of at most `scene_max_depth`
+/// scattering events unless the settings say otherwise.
+pub fn create(
+    kind: IntegratorKind,
+    settings: &IntegratorSettings,
+    scene_max_depth: u32,
+) -> Result<Box<dyn Integrator>, String> {
+    settings.validate(kind)?;
+    let s = settings;
+    let d = s.maxdepth.unwrap_or(scene_max_depth);
+    Ok(match kind {
+        IntegratorKind::Path => Box::new(PathIntegrator::new(d)),
+        IntegratorKind::Bdpt => Box::new(BdptIntegrator {
+            strategy_images: s.strategy_images,
+            heuristic: s.mis.unwrap_or_default(),
+            ..BdptIntegrator::new(d)
+        }),
+        IntegratorKind::Mmlt => {
+            let m = MmltIntegrator::new(d);
+            Box::new(MmltIntegrator {
+                bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
+                chains: s.chains.unwrap_or(m.chains),
+                large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
+                ..m
+            })
+        }
+        IntegratorKind::Pssmlt => {
+            let m = PssmltIntegrator::new(d);
+            Box::new(PssmltIntegrator {
+                bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
+                chains: s.chains.unwrap_or(m.chains),
+                large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
+                ..m
+            })
+        }
+        IntegratorKind::Tempered => {
+            let m = TemperedIntegrator::new(d);
+            Box::new(TemperedIntegrator {
+                bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
+                chains: s.chains.unwrap_or(m.chains),
+                large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
+                replicas: s.replica_count().unwrap_or(m.replicas),
+                swap: s.swap.unwrap_or(m.swap),
+                ladder: s.ladder.clone().unwrap_or_default(),
+                roughen_mis: s.tempered_mis.map_or(m.roughen_mis, |t| t == TemperedMis::Roughened),
+                burn_in: s.burn_in.unwrap_or(m.burn_in),
+                swap_target: s.swap_target.unwrap_or(m.swap_target),
+                reuse_replicas: s.reuse_replicas.unwrap_or(m.reuse_replicas),
+                swap_every: s.swap_every.unwrap_or(m.swap_every),
+                ..m
+            })
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_are_checked_against_the_integrator_and_each_other() {
+        let ok = IntegratorSettings { replicas: Some(3), ladder: Some(vec![0.1, 0.3]), ..Default::default() };
+        assert!(create(IntegratorKind::Tempered, &ok, 5).is_ok());
+        let cases = [
+            (IntegratorKind::Mmlt, IntegratorSettings { replicas: Some(3), ..Default::default() }, "replicas is not"),
+            (IntegratorKind::Path, IntegratorSettings { mis: Some(Heuristic::Balance), ..Default::default() }, "mis"),
+            (IntegratorKind::Tempered, IntegratorSettings { replicas: Some(4), ..ok.clone() }, "must be 3"),
+            (IntegratorKind::Tempered, IntegratorSettings { ladder: Some(vec![0.3, 0.1]), ..ok.clone() }, "increase"),
+            (IntegratorKind::Mmlt, IntegratorSettings { large_step: Some(0.0), ..Default::default() }, "probability"),
+            (IntegratorKind::Mmlt, IntegratorSettings { chains: Some(0), ..Default::default() }, "chains must lie"),
+            (
+                IntegratorKind::Tempered,
+                IntegratorSettings { swap: Some(Swap::Permutation), replicas: Some(9), ..Default::default() },
+                "at most 8",
+            ),
+        ];
+        for (kind, settings, needle) in cases {
+            let err = create(kind, &settings, 5).err().unwrap_or_default();
+            assert!(err.contains(needle), "{kind} {settings:?}: {err:?}");
+        }
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for kind in IntegratorKind::ALL {
+            assert_eq!(IntegratorKind::from_name(kind.name()), Some(kind));
+        }
+        assert_eq!(IntegratorKind::from_name("sppm"), None);
+    }
+}
