@@ -49,5 +49,12 @@ pub fn run(args: InfoArgs) -> Result<()> {
     for w in &loaded.warnings {
         println!("    {w}");
     }
+    let ignored = loaded.info.as_ref().map_or(&[][..], |i| i.ignored.as_slice());
+    if !ignored.is_empty() {
+        println!("  ignored       {} parameters, on purpose:", ignored.len());
+        for i in ignored {
+            println!("    {i}");
+        }
+    }
     Ok(())
 }

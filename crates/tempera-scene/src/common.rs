@@ -1,7 +1,7 @@
-//! Helpers shared by the loaders: the scale of a similarity transform, and parametric grid
-//! meshes for shapes built from triangles.
+//! Geometry helpers shared by the loaders: analytic spheres and disks where the transform
+//! allows (a similarity), and parametric grid meshes for shapes built from triangles.
 
-use tempera::geometry::TriangleMesh;
+use tempera::geometry::{Disk, Shape, Sphere, TriangleMesh};
 use tempera::math::{Mat4, Vec2, Vec3};
 
 /// For a similarity transform (rotation, uniform scale, translation, possibly mirrored), its
@@ -16,6 +16,28 @@ pub fn uniform_scale(m: &Mat4) -> Option<f32> {
         && c[1].dot(c[2]).abs() <= 1e-4 * s * s
         && m.row(3) == tempera::math::Vec4::W;
     ok.then_some(s)
+}
+
+/// An analytic sphere of `radius` around `center` (object space) placed by `to_world`, when
+/// `to_world` is a similarity; `None` otherwise (the caller tessellates). `reverse`: the file
+/// flips the orientation (a mirroring transform flips it again).
+pub fn analytic_sphere(to_world: &Mat4, center: Vec3, radius: f32, reverse: bool) -> Option<Shape> {
+    let k = uniform_scale(to_world)?;
+    let flips = to_world.determinant() < 0.0;
+    let center = to_world.transform_point3(center);
+    Some(Shape::Sphere(Sphere { center, radius: radius * k, reverse_orientation: reverse ^ flips }))
+}
+
+/// An analytic disk of `radius` around `center` facing +z (object space) placed by
+/// `to_world`, when `to_world` is a similarity; `None` otherwise. `reverse` as for
+/// [`analytic_sphere`].
+pub fn analytic_disk(to_world: &Mat4, center: Vec3, radius: f32, reverse: bool) -> Option<Shape> {
+    let k = uniform_scale(to_world)?;
+    let flips = to_world.determinant() < 0.0;
+    let normal = to_world.inverse().transpose().transform_vector3(Vec3::Z);
+    let mut disk = Disk::new(to_world.transform_point3(center), normal, radius * k);
+    disk.reverse_orientation = reverse ^ flips;
+    Some(Shape::Disk(disk))
 }
 
 /// A grid mesh over `(u, v) ∈ [0,1]²` mapped through `f` to a position and normal.

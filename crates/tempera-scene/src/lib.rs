@@ -3,6 +3,7 @@
 //! by extension: `.pbrt` (pbrt-v4) and `.xml` (Mitsuba 0.5/0.6 XML).
 
 mod common;
+mod context;
 pub mod diagnostics;
 mod mitsuba;
 mod pbrt;
@@ -47,6 +48,8 @@ pub struct LoadInfo {
     pub lights: BTreeMap<String, usize>,
     /// The integrator named by the file, as written there.
     pub integrator: Option<String>,
+    /// Parameters read and deliberately ignored: `file:line:col: "name": why`.
+    pub ignored: Vec<String>,
 }
 
 /// A loaded scene, ready to build, with the loader's warnings.

@@ -211,3 +211,19 @@ fn sunsky_places_the_sun_from_date_and_location() {
     assert!(sun.to_light.y > 0.995, "equinox noon on the equator: the sun is overhead ({})", sun.to_light);
     assert!(scene.lights.iter().any(|l| l.is_infinite()), "and the sky is an environment light");
 }
+
+#[test]
+fn deliberately_ignored_properties_are_listed_with_their_reason_not_warned() {
+    let text = wrap(
+        "<integrator type=\"path\">\n<integer name=\"rrDepth\" value=\"5\"/>\n<integer name=\"bogus\" value=\"1\"/>\n</integrator>",
+    );
+    let loaded = load_text(&text).unwrap();
+    assert_eq!(loaded.info.ignored.len(), 1, "{:?}", loaded.info.ignored);
+    let ignored = &loaded.info.ignored[0];
+    assert!(
+        ignored.contains("mem.xml:4:") && ignored.contains("\"rrDepth\"") && ignored.contains("sample"),
+        "{ignored}"
+    );
+    assert_eq!(loaded.warnings.len(), 1, "the unknown property still warns: {:?}", loaded.warnings);
+    assert!(loaded.warnings[0].message.contains("\"bogus\""), "{:?}", loaded.warnings);
+}

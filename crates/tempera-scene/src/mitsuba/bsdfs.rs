@@ -168,7 +168,7 @@ impl Loader {
                 Material::Mix(_) => "blend",
             };
             if !matches!(ty.as_str(), "twosided" | "bumpmap" | "mask") {
-                *self.info.materials.entry(name.to_owned()).or_default() += 1;
+                *self.cx.info.materials.entry(name.to_owned()).or_default() += 1;
             }
         }
         self.report_unused(ctx, &props, &format!("bsdf \"{ty}\""))?;
@@ -187,12 +187,12 @@ impl Loader {
             return Some(id);
         }
         let material = desc.material.clone()?;
-        let id = self.builder.add_material(material);
+        let id = self.cx.builder.add_material(material);
         if desc.one_sided {
-            self.builder.set_one_sided(id);
+            self.cx.builder.set_one_sided(id);
         }
         if let Some(d) = &desc.displacement {
-            self.builder.set_displacement(id, d.clone());
+            self.cx.builder.set_displacement(id, d.clone());
         }
         desc.id = Some(id);
         Some(id)
@@ -208,8 +208,7 @@ impl Loader {
                         Some(&props.loc),
                         "roughdiffuse (Oren–Nayar) is approximated by Lambertian diffuse",
                     )?;
-                    props.float(ctx, "alpha", 0.0).ok();
-                    props.bool(ctx, "useFastApprox", false).ok();
+                    self.ignore(ctx, props, &["alpha", "useFastApprox"], "Lambertian diffuse stands in for Oren–Nayar");
                 }
                 let r = self.color_or_texture(ctx, props, "reflectance", Some(Rgb::splat(0.5)))?.expect("default");
                 BsdfDesc::new(Material::diffuse(r), true)
@@ -343,14 +342,7 @@ impl Loader {
         encoding: ColorEncoding,
         at: &crate::Loc,
     ) -> Result<Arc<tempera::texture::Image>, LoadError> {
-        let path = ctx.resolve(file);
-        let key = path.join(format!("{encoding:?}"));
-        if let Some(img) = self.images.get(&key) {
-            return Ok(Arc::clone(img));
-        }
-        let img = Arc::new(tempera_image::read_image(&path, encoding).map_err(|e| ctx.err(at, e.to_string()))?);
-        self.images.insert(key, Arc::clone(&img));
-        Ok(img)
+        self.cx.image(&ctx.resolve(file), encoding, false, at)
     }
 
     fn mapping(ctx: &Ctx, props: &Props, scale: f32) -> Result<UvMapping, LoadError> {
@@ -371,7 +363,7 @@ impl Loader {
         }
         let props = Props::new(ctx, n);
         let ty = props.ty(ctx)?;
-        self.info.textures += 1;
+        self.cx.info.textures += 1;
         let tex = match ty.as_str() {
             "bitmap" => {
                 let file =

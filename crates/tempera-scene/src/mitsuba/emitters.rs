@@ -65,9 +65,9 @@ impl Loader {
             other => return Err(ctx.err(&props.loc, format!("emitter \"{other}\" is not supported"))),
         };
         self.report_unused(ctx, &props, &format!("emitter \"{ty}\""))?;
-        *self.info.lights.entry(ty).or_default() += lights.len();
+        *self.cx.info.lights.entry(ty).or_default() += lights.len();
         for l in lights {
-            self.builder.add_light(l);
+            self.cx.builder.add_light(l);
         }
         Ok(())
     }

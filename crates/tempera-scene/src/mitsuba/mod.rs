@@ -9,8 +9,9 @@ mod props;
 mod shapes;
 mod sky;
 
-use crate::diagnostics::{Diagnostics, Loc};
-use crate::{LoadError, LoadInfo, LoadOptions, LoadedScene};
+use crate::context::LoadContext;
+use crate::diagnostics::Loc;
+use crate::{LoadError, LoadOptions, LoadedScene};
 use bsdfs::BsdfDesc;
 use props::Props;
 use roxmltree::Node;
@@ -21,10 +22,8 @@ use tempera::camera::{CameraDesc, FovAxis};
 use tempera::film::{FilmDesc, Filter};
 use tempera::integrator::IntegratorKind;
 use tempera::math::{Mat4, Vec3};
-use tempera::scene::{PrototypeId, RenderDefaults, SceneBuilder};
-use tempera::texture::{Image, Texture};
-
-const MAX_INCLUDE_DEPTH: usize = 32;
+use tempera::scene::PrototypeId;
+use tempera::texture::Texture;
 
 /// Per-file context: the file name (for locations) and the `<default>` values in effect.
 pub(super) struct Ctx {
@@ -71,25 +70,28 @@ impl Ctx {
 }
 
 struct Loader {
-    builder: SceneBuilder,
-    diag: Diagnostics,
-    info: LoadInfo,
+    cx: LoadContext,
     bsdfs: HashMap<String, BsdfDesc>,
     textures: HashMap<String, Texture>,
     groups: HashMap<String, Option<PrototypeId>>,
-    images: HashMap<PathBuf, Arc<Image>>,
-    film: FilmDesc,
-    defaults: RenderDefaults,
-    depth: usize,
 }
 
 impl Loader {
     fn warn(&mut self, loc: Option<&Loc>, message: impl Into<String>) -> Result<(), LoadError> {
-        self.diag.warn(loc, message)
+        self.cx.warn(loc, message)
     }
 
     fn warn_once(&mut self, key: &str, loc: Option<&Loc>, message: impl Into<String>) -> Result<(), LoadError> {
-        self.diag.warn_once(key, loc, message)
+        self.cx.warn_once(key, loc, message)
+    }
+
+    /// Marks the properties `names` of `props` as read and records, for those present, that
+    /// they are deliberately ignored and why.
+    fn ignore(&mut self, ctx: &Ctx, props: &Props, names: &[&str], why: &str) {
+        for node in props.take(names) {
+            let name = node.attribute("name").unwrap_or_default();
+            self.cx.ignored(&ctx.loc(node), name, why);
+        }
     }
 
     /// Warns about the properties of `props` that nothing read.
@@ -107,28 +109,15 @@ impl Loader {
         from: Option<&Loc>,
         defaults: HashMap<String, String>,
     ) -> Result<(), LoadError> {
-        if self.depth >= MAX_INCLUDE_DEPTH {
-            let message = format!("includes nested deeper than {MAX_INCLUDE_DEPTH} (a cycle?)");
-            return Err(match from {
-                Some(loc) => LoadError::Syntax { loc: loc.clone(), message },
-                None => LoadError::Unsupported { message },
-            });
-        }
-        let text = std::fs::read_to_string(path).map_err(|source| match from {
-            Some(loc) => {
-                LoadError::Syntax { loc: loc.clone(), message: format!("cannot read {}: {source}", path.display()) }
-            }
-            None => LoadError::Io { path: path.to_owned(), source },
-        })?;
-        self.depth += 1;
+        let text = self.cx.enter_file(path, from)?;
         self.load_text(&text, path, defaults)?;
-        self.depth -= 1;
+        self.cx.leave_file();
         Ok(())
     }
 
     fn load_text(&mut self, text: &str, path: &Path, defaults: HashMap<String, String>) -> Result<(), LoadError> {
         let file = Arc::new(path.to_owned());
-        self.info.files += 1;
+        self.cx.info.files += 1;
         let doc = roxmltree::Document::parse(text).map_err(|e| {
             let pos = e.pos();
             LoadError::Syntax { loc: Loc::new(&file, pos.row, pos.col), message: format!("malformed XML: {e}") }
@@ -180,7 +169,7 @@ impl Loader {
             "texture" => {
                 let tex = self.texture(ctx, n)?;
                 let id = n.attribute("id").ok_or_else(|| ctx.err(&loc, "a top-level <texture> needs an \"id\""))?;
-                self.info.textures += 1;
+                self.cx.info.textures += 1;
                 self.textures.insert(id.to_owned(), tex);
             }
             "shape" => self.shape(ctx, n, None)?,
@@ -210,14 +199,14 @@ impl Loader {
         // Mitsuba counts path vertices after the camera (1 = emitters seen directly); pbrt and
         // Tempera count scattering events, one fewer.
         let depth = props.int(ctx, "maxDepth", -1)?;
-        self.defaults.max_depth = if depth < 0 { 1000 } else { (depth - 1).max(0) as u32 };
-        self.info.integrator = Some(ty.clone());
-        self.defaults.integrator = match ty.as_str() {
+        self.cx.defaults.max_depth = if depth < 0 { 1000 } else { (depth - 1).max(0) as u32 };
+        self.cx.info.integrator = Some(ty.clone());
+        self.cx.defaults.integrator = match ty.as_str() {
             "path" | "volpath" | "volpath_simple" | "direct" => Some(IntegratorKind::Path),
             "mlt" | "pssmlt" => Some(IntegratorKind::Pssmlt),
             other => IntegratorKind::from_name(other),
         };
-        for quiet in [
+        let quiet = [
             "strictNormals",
             "hideEmitters",
             "rrDepth",
@@ -232,10 +221,13 @@ impl Loader {
             "directSamples",
             "lightImage",
             "sampleDirect",
-        ] {
-            props.float(ctx, quiet, 0.0).ok();
-            props.bool(ctx, quiet, false).ok();
-        }
+        ];
+        self.ignore(
+            ctx,
+            &props,
+            &quiet,
+            "a sampling parameter of Mitsuba's integrator; Tempera's integrators sample their own way",
+        );
         self.report_unused(ctx, &props, &format!("integrator \"{ty}\""))
     }
 
@@ -278,7 +270,7 @@ impl Loader {
         let fov_axis = if props.string(ctx, "focalLength")?.is_some() { FovAxis::X } else { fov_axis };
         props.float(ctx, "nearClip", 0.0)?;
         props.float(ctx, "farClip", 0.0)?;
-        self.builder.set_camera(CameraDesc {
+        self.cx.builder.set_camera(CameraDesc {
             camera_to_world,
             fov_degrees: fov as f32,
             fov_axis,
@@ -295,9 +287,8 @@ impl Loader {
             if !(1..=1 << 24).contains(&count) {
                 return Err(ctx.err(&sp.loc, format!("sampleCount {count} is out of range")));
             }
-            self.defaults.spp = count as u32;
-            sp.int(ctx, "scramble", 0).ok();
-            sp.int(ctx, "dimension", 0).ok();
+            self.cx.defaults.spp = count as u32;
+            self.ignore(ctx, &sp, &["scramble", "dimension"], "Tempera's samplers are not low-discrepancy");
             self.report_unused(ctx, &sp, "sampler")?;
         }
         self.report_unused(ctx, &props, &format!("sensor \"{ty}\""))
@@ -309,8 +300,8 @@ impl Loader {
         if !(1..=65_536).contains(&w) || !(1..=65_536).contains(&h) {
             return Err(ctx.err(&props.loc, format!("film size {w}x{h} is out of range")));
         }
-        self.film.width = w as u32;
-        self.film.height = h as u32;
+        self.cx.film.width = w as u32;
+        self.cx.film.height = h as u32;
         // Output-format options do not change the rendered radiance.
         for name in [
             "fileFormat",
@@ -330,7 +321,7 @@ impl Loader {
         if props.find_crop() {
             self.warn(Some(&props.loc), "film crop windows are ignored")?;
         }
-        self.film.filter = match props.object("rfilter") {
+        self.cx.film.filter = match props.object("rfilter") {
             None => Filter::Gaussian { radius: 2.0, sigma: 0.5 },
             Some(f) => {
                 let fp = Props::new(ctx, f);
@@ -347,9 +338,7 @@ impl Loader {
                             Some(&fp.loc),
                             format!("reconstruction filter \"{other}\" is approximated by a Gaussian"),
                         )?;
-                        for p in ["B", "C", "lobes"] {
-                            fp.float(ctx, p, 0.0).ok();
-                        }
+                        self.ignore(ctx, &fp, &["B", "C", "lobes"], "the filter is approximated by a Gaussian");
                         Filter::Gaussian { radius: 2.0, sigma: 0.5 }
                     }
                 };
@@ -384,23 +373,16 @@ pub fn load_str(text: &str, path: &Path, options: &LoadOptions) -> Result<Loaded
 }
 
 fn new_loader(options: &LoadOptions) -> Loader {
+    // Mitsuba 0.6's film when the file names none: 768x576 (its Gaussian filter's stddev 0.5).
+    let film = FilmDesc { width: 768, height: 576, filter: Filter::Gaussian { radius: 2.0, sigma: 0.5 } };
     Loader {
-        builder: SceneBuilder::new(),
-        diag: Diagnostics::new(options.strict),
-        info: LoadInfo::default(),
+        cx: LoadContext::new(options, film),
         bsdfs: HashMap::new(),
         textures: HashMap::new(),
         groups: HashMap::new(),
-        images: HashMap::new(),
-        film: FilmDesc { width: 768, height: 576, filter: Filter::Gaussian { radius: 2.0, sigma: 0.5 } },
-        defaults: RenderDefaults::default(),
-        depth: 0,
     }
 }
 
 fn finish(loader: Loader) -> LoadedScene {
-    let mut builder = loader.builder;
-    builder.set_film(loader.film);
-    builder.set_defaults(loader.defaults);
-    LoadedScene { builder, warnings: loader.diag.warnings, info: loader.info }
+    loader.cx.finish()
 }

@@ -164,6 +164,11 @@ impl<'a, 'i> Props<'a, 'i> {
         self.find(name).is_some()
     }
 
+    /// Marks the properties `names` as read; returns those present.
+    pub fn take(&self, names: &[&str]) -> Vec<Node<'a, 'i>> {
+        names.iter().filter_map(|name| self.find(name)).collect()
+    }
+
     /// Every unused child, for warnings.
     pub fn unused(&self) -> Vec<Node<'a, 'i>> {
         self.entries.iter().filter(|(_, used)| !used.get()).map(|(n, _)| *n).collect()

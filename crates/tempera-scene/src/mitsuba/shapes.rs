@@ -6,10 +6,10 @@
 use super::props::Props;
 use super::{Ctx, Loader};
 use crate::LoadError;
-use crate::common::{grid, uniform_scale};
+use crate::common::{analytic_disk, analytic_sphere, grid};
 use roxmltree::Node;
 use std::io::BufReader;
-use tempera::geometry::{Disk, Shape, Sphere, TriangleMesh};
+use tempera::geometry::{Shape, TriangleMesh};
 use tempera::math::frame::Frame;
 use tempera::math::{Mat4, Rgb, Vec2, Vec3};
 use tempera::scene::{AreaEmission, PrototypeShape};
@@ -129,7 +129,6 @@ impl Loader {
         to_world: Mat4,
         flip: bool,
     ) -> Result<Option<Shape>, LoadError> {
-        let flips = to_world.determinant() < 0.0;
         let mut m = match ty {
             "obj" | "ply" | "serialized" => self.file_mesh(ctx, props, ty)?,
             "rectangle" => rectangle(),
@@ -140,13 +139,8 @@ impl Loader {
                 if radius <= 0.0 {
                     return Err(ctx.err(&props.loc, "sphere radius must be positive"));
                 }
-                if let Some(k) = uniform_scale(&to_world) {
-                    let c = to_world.transform_point3(center);
-                    return Ok(Some(Shape::Sphere(Sphere {
-                        center: c,
-                        radius: radius * k,
-                        reverse_orientation: flip ^ flips,
-                    })));
+                if let Some(sphere) = analytic_sphere(&to_world, center, radius, flip) {
+                    return Ok(Some(sphere));
                 }
                 grid(SEGMENTS, SEGMENTS / 2, |u, v| {
                     let (phi, theta) = (u * std::f32::consts::TAU, v * std::f32::consts::PI);
@@ -155,11 +149,8 @@ impl Loader {
                 })
             }
             "disk" => {
-                if let Some(k) = uniform_scale(&to_world) {
-                    let normal = to_world.inverse().transpose().transform_vector3(Vec3::Z);
-                    let mut d = Disk::new(to_world.transform_point3(Vec3::ZERO), normal, k);
-                    d.reverse_orientation = flip ^ flips;
-                    return Ok(Some(Shape::Disk(d)));
+                if let Some(disk) = analytic_disk(&to_world, Vec3::ZERO, 1.0, flip) {
+                    return Ok(Some(disk));
                 }
                 grid(SEGMENTS, 4, |u, v| {
                     let (phi, r) = (u * std::f32::consts::TAU, 1.0 - v);
@@ -244,8 +235,8 @@ impl Loader {
             self.bsdfs.insert(b.to_owned(), desc);
         }
         let count = |s: &Shape| if let Shape::Mesh(m) = s { m.indices.len() } else { 0 };
-        self.info.shapes += 1;
-        self.info.triangles += count(&shape);
+        self.cx.info.shapes += 1;
+        self.cx.info.triangles += count(&shape);
         match group {
             Some(list) => {
                 if emission.is_some() {
@@ -259,9 +250,9 @@ impl Loader {
             }
             None => {
                 if emission.is_some() {
-                    *self.info.lights.entry("area".to_owned()).or_default() += 1;
+                    *self.cx.info.lights.entry("area".to_owned()).or_default() += 1;
                 }
-                self.builder.add_shape_with_alpha(shape, material, emission, alpha);
+                self.cx.builder.add_shape_with_alpha(shape, material, emission, alpha);
             }
         }
         Ok(())
@@ -276,7 +267,7 @@ impl Loader {
         for child in props.objects("shape") {
             self.shape(ctx, child, Some(&mut shapes))?;
         }
-        let prototype = (!shapes.is_empty()).then(|| self.builder.add_prototype(shapes));
+        let prototype = (!shapes.is_empty()).then(|| self.cx.builder.add_prototype(shapes));
         self.groups.insert(id.to_owned(), prototype);
         self.report_unused(ctx, props, "shapegroup")
     }
@@ -290,9 +281,9 @@ impl Loader {
         if !to_world.is_finite() || to_world.determinant().abs() < 1e-20 {
             return Err(ctx.err(&props.loc, "instance with a singular transformation"));
         }
-        self.info.instances += 1;
+        self.cx.info.instances += 1;
         if let Some(p) = prototype {
-            self.builder.add_instance(p, to_world);
+            self.cx.builder.add_instance(p, to_world);
         }
         self.report_unused(ctx, props, "instance")
     }

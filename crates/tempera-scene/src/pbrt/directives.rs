@@ -308,7 +308,7 @@ impl Loader {
         if !(fov > 0.0 && fov < 180.0) {
             return Err(LoadError::Syntax { loc: at, message: format!("fov {fov} is outside (0, 180)") });
         }
-        self.builder.set_camera(CameraDesc {
+        self.cx.builder.set_camera(CameraDesc {
             camera_to_world,
             fov_degrees: fov as f32,
             fov_axis: tempera::camera::FovAxis::Shorter,
@@ -329,10 +329,10 @@ impl Loader {
         if !(1..=65_536).contains(&w) || !(1..=65_536).contains(&h) {
             return Err(LoadError::Syntax { loc: at, message: format!("film resolution {w}x{h} is out of range") });
         }
-        self.film.width = w as u32;
-        self.film.height = h as u32;
+        self.cx.film.width = w as u32;
+        self.cx.film.height = h as u32;
         if let Some(name) = params.string("filename")? {
-            self.defaults.output = Some(name.into());
+            self.cx.defaults.output = Some(name.into());
         }
         self.report_unused(&params, &format!("Film \"{ty}\""))
     }
@@ -344,7 +344,7 @@ impl Loader {
         if !(1..=1 << 24).contains(&spp) {
             return Err(LoadError::Syntax { loc: at, message: format!("pixelsamples {spp} is out of range") });
         }
-        self.defaults.spp = spp as u32;
+        self.cx.defaults.spp = spp as u32;
         self.report_unused(&params, &format!("Sampler \"{ty}\""))
     }
 
@@ -355,9 +355,9 @@ impl Loader {
         if !(0..=100_000).contains(&depth) {
             return Err(LoadError::Syntax { loc: at, message: format!("maxdepth {depth} is out of range") });
         }
-        self.defaults.max_depth = depth as u32;
-        self.info.integrator = Some(ty.clone());
-        self.defaults.integrator = match ty.as_str() {
+        self.cx.defaults.max_depth = depth as u32;
+        self.cx.info.integrator = Some(ty.clone());
+        self.cx.defaults.integrator = match ty.as_str() {
             "path" | "volpath" => Some(IntegratorKind::Path),
             "mlt" => Some(IntegratorKind::Mmlt),
             other => IntegratorKind::from_name(other),
@@ -380,7 +380,7 @@ impl Loader {
             self.warn(Some(&at), format!("anisotropic filter radii ({rx}, {ry}) are not supported; using {rx}"))?;
         }
         let radius = rx.max(1e-3) as f32;
-        self.film.filter = match ty.as_str() {
+        self.cx.film.filter = match ty.as_str() {
             "box" => Filter::Box { radius },
             "triangle" => Filter::Triangle { radius },
             "gaussian" => Filter::Gaussian { radius, sigma: params.float("sigma", 0.5)? as f32 },
@@ -411,13 +411,13 @@ impl Loader {
                 )?;
             }
             let Some(material) = self.material_id(&s.material) else { continue };
-            self.info.shapes += 1;
+            self.cx.info.shapes += 1;
             if let tempera::geometry::Shape::Mesh(m) = &s.shape {
-                self.info.triangles += m.indices.len();
+                self.cx.info.triangles += m.indices.len();
             }
             parts.push((s.shape, material, s.alpha));
         }
-        Ok((!parts.is_empty()).then(|| self.builder.add_prototype(parts)))
+        Ok((!parts.is_empty()).then(|| self.cx.builder.add_prototype(parts)))
     }
 
     fn instance(&mut self, name: &str, at: &Loc) -> Result<(), LoadError> {
@@ -430,7 +430,7 @@ impl Loader {
                 message: "ObjectInstance inside ObjectBegin is not supported".into(),
             });
         }
-        self.info.instances += 1;
+        self.cx.info.instances += 1;
         if let Some(prototype) = prototype {
             let m = self.state.ctm;
             if !m.is_finite() || m.determinant().abs() < 1e-20 {
@@ -439,7 +439,7 @@ impl Loader {
                     message: "ObjectInstance with a singular transformation".into(),
                 });
             }
-            self.builder.add_instance(prototype, m);
+            self.cx.builder.add_instance(prototype, m);
         }
         Ok(())
     }
@@ -457,13 +457,13 @@ impl Loader {
             return;
         }
         let Some(id) = self.material_id(material) else { return };
-        self.info.shapes += 1;
+        self.cx.info.shapes += 1;
         if emission.is_some() {
-            *self.info.lights.entry("area (diffuse)".to_owned()).or_default() += 1;
+            *self.cx.info.lights.entry("area (diffuse)".to_owned()).or_default() += 1;
         }
         if let tempera::geometry::Shape::Mesh(m) = &shape {
-            self.info.triangles += m.indices.len();
+            self.cx.info.triangles += m.indices.len();
         }
-        self.builder.add_shape_with_alpha(shape, id, emission, alpha);
+        self.cx.builder.add_shape_with_alpha(shape, id, emission, alpha);
     }
 }

@@ -86,8 +86,8 @@ impl Loader {
             other => return Err(syntax(&at, format!("unknown light type \"{other}\""))),
         };
         self.report_unused(&params, &format!("LightSource \"{ty}\""))?;
-        *self.info.lights.entry(ty).or_default() += 1;
-        self.builder.add_light(light);
+        *self.cx.info.lights.entry(ty).or_default() += 1;
+        self.cx.builder.add_light(light);
         Ok(())
     }
 

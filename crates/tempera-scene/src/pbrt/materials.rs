@@ -191,10 +191,10 @@ impl Loader {
                 });
             }
         };
-        *self.info.materials.entry(ty.to_owned()).or_default() += 1;
-        let id = self.builder.add_material(material);
+        *self.cx.info.materials.entry(ty.to_owned()).or_default() += 1;
+        let id = self.cx.builder.add_material(material);
         if let Some(d) = displacement {
-            self.builder.set_displacement(id, d);
+            self.cx.builder.set_displacement(id, d);
         }
         Ok(MaterialSlot::Id(id))
     }

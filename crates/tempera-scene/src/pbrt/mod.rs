@@ -13,20 +13,16 @@ mod shapes;
 mod state;
 mod textures;
 
-use crate::diagnostics::{Diagnostics, Loc};
-use crate::{LoadError, LoadInfo, LoadOptions, LoadedScene};
+use crate::context::LoadContext;
+use crate::diagnostics::Loc;
+use crate::{LoadError, LoadOptions, LoadedScene};
 use lexer::{Lexer, TokenKind};
 use params::ParamSet;
 use state::{GraphicsState, MaterialSlot, Named, ObjectShape};
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use tempera::film::{FilmDesc, Filter};
-use tempera::scene::{MaterialId, RenderDefaults, SceneBuilder};
-use tempera::texture::Image;
-
-/// Nesting limit for `Include`/`Import` (guards against include cycles).
-const MAX_INCLUDE_DEPTH: usize = 32;
+use tempera::scene::MaterialId;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Block {
@@ -35,48 +31,38 @@ enum Block {
 }
 
 struct Loader {
-    builder: SceneBuilder,
+    cx: LoadContext,
     state: GraphicsState,
     stack: Vec<(GraphicsState, Block, Loc)>,
     named: Named,
-    diag: Diagnostics,
-    info: LoadInfo,
     default_material: Option<MaterialId>,
     object: Option<(String, Vec<ObjectShape>, Loc)>,
-    images: HashMap<PathBuf, Arc<Image>>,
-    include_depth: usize,
     world_begun: bool,
-    film: FilmDesc,
-    defaults: RenderDefaults,
 }
 
 impl Loader {
     fn new(options: &LoadOptions) -> Self {
+        // pbrt-v4's film when the file names none: 1280x720, Gaussian filter of radius 1.5.
+        let film = FilmDesc { width: 1280, height: 720, filter: Filter::Gaussian { radius: 1.5, sigma: 0.5 } };
         Self {
-            builder: SceneBuilder::new(),
+            cx: LoadContext::new(options, film),
             state: GraphicsState::default(),
             stack: Vec::new(),
             named: Named::default(),
-            diag: Diagnostics::new(options.strict),
-            info: LoadInfo::default(),
             default_material: None,
             object: None,
-            images: HashMap::new(),
-            include_depth: 0,
             world_begun: false,
-            film: FilmDesc { width: 1280, height: 720, filter: Filter::Gaussian { radius: 1.5, sigma: 0.5 } },
-            defaults: RenderDefaults::default(),
         }
     }
 
     /// Records a warning, or fails in strict mode.
     fn warn(&mut self, loc: Option<&Loc>, message: impl Into<String>) -> Result<(), LoadError> {
-        self.diag.warn(loc, message)
+        self.cx.warn(loc, message)
     }
 
     /// Warns once per `key` (e.g. once per approximated material type).
     fn warn_once(&mut self, key: &str, loc: Option<&Loc>, message: impl Into<String>) -> Result<(), LoadError> {
-        self.diag.warn_once(key, loc, message)
+        self.cx.warn_once(key, loc, message)
     }
 
     /// Warns about every parameter of `params` that no lookup used.
@@ -104,33 +90,20 @@ impl Loader {
             MaterialSlot::Id(id) => Some(*id),
             MaterialSlot::Interface => None,
             MaterialSlot::Default => Some(*self.default_material.get_or_insert_with(|| {
-                self.builder.add_material(tempera::material::Material::diffuse(tempera::math::Rgb::splat(0.5)))
+                self.cx.builder.add_material(tempera::material::Material::diffuse(tempera::math::Rgb::splat(0.5)))
             })),
         }
     }
 
     fn parse_file(&mut self, path: &Path, from: Option<&Loc>) -> Result<(), LoadError> {
-        if self.include_depth >= MAX_INCLUDE_DEPTH {
-            let loc =
-                from.cloned().ok_or_else(|| LoadError::Unsupported { message: "include nesting too deep".into() })?;
-            return Err(LoadError::Syntax {
-                loc,
-                message: format!("includes nested deeper than {MAX_INCLUDE_DEPTH} (a cycle?)"),
-            });
-        }
-        let bytes = std::fs::read(path).map_err(|source| match from {
-            Some(loc) => {
-                LoadError::Syntax { loc: loc.clone(), message: format!("cannot read {}: {source}", path.display()) }
-            }
-            None => LoadError::Io { path: path.to_owned(), source },
-        })?;
-        let text = String::from_utf8_lossy(&bytes);
-        self.parse_source(&text, path)
+        let text = self.cx.enter_file(path, from)?;
+        self.parse_source(&text, path)?;
+        self.cx.leave_file();
+        Ok(())
     }
 
     fn parse_source(&mut self, text: &str, path: &Path) -> Result<(), LoadError> {
-        self.info.files += 1;
-        self.include_depth += 1;
+        self.cx.info.files += 1;
         let mut lx = Lexer::new(text, Arc::new(path.to_owned()));
         while let Some(tok) = lx.next_token()? {
             let loc = lx.loc_of(&tok);
@@ -148,7 +121,6 @@ impl Loader {
                 }
             }
         }
-        self.include_depth -= 1;
         Ok(())
     }
 }
@@ -179,8 +151,5 @@ fn finish(loader: Loader) -> Result<LoadedScene, LoadError> {
             message: format!("ObjectBegin \"{name}\" without ObjectEnd"),
         });
     }
-    let mut builder = loader.builder;
-    builder.set_film(loader.film);
-    builder.set_defaults(loader.defaults);
-    Ok(LoadedScene { builder, warnings: loader.diag.warnings, info: loader.info })
+    Ok(loader.cx.finish())
 }

@@ -7,10 +7,10 @@ use super::directives::string_arg;
 use super::lexer::Lexer;
 use super::params::ParamSet;
 use crate::LoadError;
-use crate::common::{grid, uniform_scale};
+use crate::common::{analytic_disk, analytic_sphere, grid};
 use crate::diagnostics::Loc;
 use std::f32::consts::TAU;
-use tempera::geometry::{Disk, Shape, Sphere, TriangleMesh};
+use tempera::geometry::{Shape, TriangleMesh};
 use tempera::math::{Vec2, Vec3};
 
 /// Segments around the axis of tessellated quadrics.
@@ -140,33 +140,29 @@ impl Loader {
         }
         let phi_max = (params.float("phimax", 360.0)? as f32).clamp(0.0, 360.0).to_radians();
         let ctm = self.state.ctm;
-        let flips = ctm.determinant() < 0.0;
         let reverse = self.state.reverse_orientation;
-        let similarity = uniform_scale(&ctm);
         let whole = (phi_max - TAU).abs() < 1e-6;
         let mesh = match ty {
             "sphere" => {
                 let zmin = (params.float("zmin", -f64::from(radius))? as f32).clamp(-radius, radius);
                 let zmax = (params.float("zmax", f64::from(radius))? as f32).clamp(-radius, radius);
-                if let (Some(k), true, true) = (similarity, whole, zmin <= -radius && zmax >= radius) {
-                    let center = ctm.transform_point3(Vec3::ZERO);
-                    return Ok(Shape::Sphere(Sphere {
-                        center,
-                        radius: radius * k,
-                        reverse_orientation: reverse ^ flips,
-                    }));
+                if whole
+                    && zmin <= -radius
+                    && zmax >= radius
+                    && let Some(sphere) = analytic_sphere(&ctm, Vec3::ZERO, radius, reverse)
+                {
+                    return Ok(sphere);
                 }
                 sphere_mesh(radius, zmin.min(zmax), zmin.max(zmax), phi_max)
             }
             "disk" => {
                 let height = params.float("height", 0.0)? as f32;
                 let inner = params.float("innerradius", 0.0)? as f32;
-                if let (Some(k), true, true) = (similarity, whole, inner <= 0.0) {
-                    let center = ctm.transform_point3(Vec3::new(0.0, 0.0, height));
-                    let normal = ctm.inverse().transpose().transform_vector3(Vec3::Z);
-                    let mut disk = Disk::new(center, normal, radius * k);
-                    disk.reverse_orientation = reverse ^ flips;
-                    return Ok(Shape::Disk(disk));
+                if whole
+                    && inner <= 0.0
+                    && let Some(disk) = analytic_disk(&ctm, Vec3::new(0.0, 0.0, height), radius, reverse)
+                {
+                    return Ok(disk);
                 }
                 disk_mesh(height, radius, inner.clamp(0.0, radius), phi_max)
             }

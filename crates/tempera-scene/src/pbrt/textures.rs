@@ -134,19 +134,7 @@ impl Loader {
         at: &Loc,
     ) -> Result<Arc<Image>, LoadError> {
         let path = self.resolve(at, file);
-        let key = path.join(format!("{encoding:?}-{grey}"));
-        if let Some(img) = self.images.get(&key) {
-            return Ok(Arc::clone(img));
-        }
-        let mut img = tempera_image::read_image(&path, encoding).map_err(|e| syntax(at, e.to_string()))?;
-        if grey {
-            for p in &mut img.pixels {
-                *p = Rgb::splat(p.element_sum() / 3.0);
-            }
-        }
-        let img = Arc::new(img);
-        self.images.insert(key, Arc::clone(&img));
-        Ok(img)
+        self.cx.image(&path, encoding, grey, at)
     }
 
     fn encoding(&mut self, params: &ParamSet, at: &Loc) -> Result<ColorEncoding, LoadError> {
@@ -245,7 +233,7 @@ impl Loader {
         };
         let tex = self.make_texture(&class, float, &params, &at)?;
         self.report_unused(&params, &format!("Texture \"{name}\""))?;
-        self.info.textures += 1;
+        self.cx.info.textures += 1;
         let map = if float { &mut self.named.float_textures } else { &mut self.named.spectrum_textures };
         if map.insert(name.clone(), tex).is_some() {
             self.warn(Some(&at), format!("texture \"{name}\" redefined"))?;
