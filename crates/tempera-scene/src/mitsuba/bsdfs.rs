@@ -198,6 +198,75 @@ impl Loader {
         Some(id)
     }
 
+    /// `dielectric`, `roughdielectric` and (approximated) `thindielectric`.
+    fn dielectric(&mut self, ctx: &Ctx, props: &Props, ty: &str) -> Result<BsdfDesc, LoadError> {
+        let rough = ty.starts_with("rough");
+        if ty == "thindielectric" {
+            self.warn_once(
+                "thindielectric",
+                Some(&props.loc),
+                "thindielectric is approximated by a solid dielectric of the same index",
+            )?;
+        }
+        let eta = self.ior(ctx, props, "intIOR", 1.5046)? / self.ior(ctx, props, "extIOR", 1.000_277)?;
+        for name in ["specularReflectance", "specularTransmittance"] {
+            if props.color(ctx, name, false)?.is_some_and(|c| c != Rgb::ONE) {
+                self.warn_once(
+                    name,
+                    Some(&props.loc),
+                    format!("{name} other than 1 is not supported for dielectrics"),
+                )?;
+            }
+        }
+        let roughness = self.roughness(ctx, props, ty, rough)?;
+        Ok(BsdfDesc::new(Material::Dielectric(DielectricMaterial { eta, roughness }), false))
+    }
+
+    /// `conductor` and `roughconductor`: a named material, or `eta` and `k` (copper's by
+    /// default), relative to `extEta`.
+    fn conductor(&mut self, ctx: &Ctx, props: &Props, ty: &str) -> Result<BsdfDesc, LoadError> {
+        let rough = ty.starts_with("rough");
+        let ext = props.float(ctx, "extEta", 1.0)? as f32;
+        let fresnel = match props.string(ctx, "material")? {
+            Some(name) if name == "none" => ConductorFresnel::Reflectance(Rgb::ONE.into()),
+            Some(name) => {
+                let (eta, k) = named_conductor(&name)
+                    .ok_or_else(|| ctx.err(&props.loc, format!("unknown conductor material \"{name}\"")))?;
+                ConductorFresnel::Ior { eta: (eta / ext).into(), k: (k / ext).into() }
+            }
+            None => {
+                let (eta0, k0) = named_conductor("Cu").expect("copper is known");
+                let eta = props.color(ctx, "eta", false)?.unwrap_or(eta0);
+                let k = props.color(ctx, "k", false)?.unwrap_or(k0);
+                ConductorFresnel::Ior { eta: (eta / ext).into(), k: (k / ext).into() }
+            }
+        };
+        let roughness = self.roughness(ctx, props, ty, rough)?;
+        let tint = self.color_or_texture(ctx, props, "specularReflectance", Some(Rgb::ONE))?.expect("default");
+        Ok(BsdfDesc::new(Material::Conductor(ConductorMaterial { fresnel, roughness, tint }), true))
+    }
+
+    /// `blendbsdf`: two nested BSDFs mixed by a constant or textured `weight`.
+    fn blend(&mut self, ctx: &Ctx, props: &Props) -> Result<BsdfDesc, LoadError> {
+        let weight = match props.named_object("weight") {
+            Some(n) => self.texture_ref(ctx, n)?,
+            None => Texture::Constant(Rgb::splat(props.float(ctx, "weight", 0.5)? as f32)),
+        };
+        let parts: Vec<Node> = props.objects("bsdf").into_iter().chain(props.objects("ref")).collect();
+        if parts.len() != 2 {
+            return Err(ctx.err(&props.loc, "blendbsdf needs exactly two nested BSDFs"));
+        }
+        let mut ids = [0u32; 2];
+        for (slot, n) in ids.iter_mut().zip(parts) {
+            let mut d = self.bsdf(ctx, n)?;
+            *slot = self
+                .register(&mut d)
+                .ok_or_else(|| ctx.err(&props.loc, "blendbsdf of a null BSDF is not supported"))?
+                .0;
+        }
+        Ok(BsdfDesc::new(Material::Mix(MixMaterial { materials: ids, amount: weight }), false))
+    }
+
     fn make_bsdf(&mut self, ctx: &Ctx, props: &Props, ty: &str) -> Result<BsdfDesc, LoadError> {
         let rough = ty.starts_with("rough");
         Ok(match ty {
@@ -213,47 +282,8 @@ impl Loader {
                 let r = self.color_or_texture(ctx, props, "reflectance", Some(Rgb::splat(0.5)))?.expect("default");
                 BsdfDesc::new(Material::diffuse(r), true)
             }
-            "conductor" | "roughconductor" => {
-                let ext = props.float(ctx, "extEta", 1.0)? as f32;
-                let fresnel = match props.string(ctx, "material")? {
-                    Some(name) if name == "none" => ConductorFresnel::Reflectance(Rgb::ONE.into()),
-                    Some(name) => {
-                        let (eta, k) = named_conductor(&name)
-                            .ok_or_else(|| ctx.err(&props.loc, format!("unknown conductor material \"{name}\"")))?;
-                        ConductorFresnel::Ior { eta: (eta / ext).into(), k: (k / ext).into() }
-                    }
-                    None => {
-                        let (eta0, k0) = named_conductor("Cu").expect("copper is known");
-                        let eta = props.color(ctx, "eta", false)?.unwrap_or(eta0);
-                        let k = props.color(ctx, "k", false)?.unwrap_or(k0);
-                        ConductorFresnel::Ior { eta: (eta / ext).into(), k: (k / ext).into() }
-                    }
-                };
-                let roughness = self.roughness(ctx, props, ty, rough)?;
-                let tint = self.color_or_texture(ctx, props, "specularReflectance", Some(Rgb::ONE))?.expect("default");
-                BsdfDesc::new(Material::Conductor(ConductorMaterial { fresnel, roughness, tint }), true)
-            }
-            "dielectric" | "roughdielectric" | "thindielectric" => {
-                if ty == "thindielectric" {
-                    self.warn_once(
-                        "thindielectric",
-                        Some(&props.loc),
-                        "thindielectric is approximated by a solid dielectric of the same index",
-                    )?;
-                }
-                let eta = self.ior(ctx, props, "intIOR", 1.5046)? / self.ior(ctx, props, "extIOR", 1.000_277)?;
-                for name in ["specularReflectance", "specularTransmittance"] {
-                    if props.color(ctx, name, false)?.is_some_and(|c| c != Rgb::ONE) {
-                        self.warn_once(
-                            name,
-                            Some(&props.loc),
-                            format!("{name} other than 1 is not supported for dielectrics"),
-                        )?;
-                    }
-                }
-                let roughness = self.roughness(ctx, props, ty, rough)?;
-                BsdfDesc::new(Material::Dielectric(DielectricMaterial { eta, roughness }), false)
-            }
+            "conductor" | "roughconductor" => self.conductor(ctx, props, ty)?,
+            "dielectric" | "roughdielectric" | "thindielectric" => self.dielectric(ctx, props, ty)?,
             "plastic" | "roughplastic" => {
                 let eta = self.ior(ctx, props, "intIOR", 1.49)? / self.ior(ctx, props, "extIOR", 1.000_277)?;
                 let diffuse =
@@ -286,44 +316,23 @@ impl Loader {
                 inner.opacity = Some(opacity);
                 inner
             }
-            "blendbsdf" => {
-                let weight = match props.named_object("weight") {
-                    Some(n) => self.texture_ref(ctx, n)?,
-                    None => Texture::Constant(Rgb::splat(props.float(ctx, "weight", 0.5)? as f32)),
-                };
-                let parts: Vec<Node> = props.objects("bsdf").into_iter().chain(props.objects("ref")).collect();
-                if parts.len() != 2 {
-                    return Err(ctx.err(&props.loc, "blendbsdf needs exactly two nested BSDFs"));
-                }
-                let mut ids = [0u32; 2];
-                for (slot, n) in ids.iter_mut().zip(parts) {
-                    let mut d = self.bsdf(ctx, n)?;
-                    *slot = self
-                        .register(&mut d)
-                        .ok_or_else(|| ctx.err(&props.loc, "blendbsdf of a null BSDF is not supported"))?
-                        .0;
-                }
-                BsdfDesc::new(Material::Mix(MixMaterial { materials: ids, amount: weight }), false)
-            }
+            "blendbsdf" => self.blend(ctx, props)?,
             "coating" | "roughcoating" => {
                 self.warn_once(
                     "coating",
                     Some(&props.loc),
                     format!("{ty} is approximated by its base BSDF without the coating"),
                 )?;
-                for name in ["intIOR", "extIOR", "thickness", "sigmaA", "alpha", "distribution", "specularReflectance"]
-                {
-                    props.named_value_present(name);
-                }
+                let coating =
+                    ["intIOR", "extIOR", "thickness", "sigmaA", "alpha", "distribution", "specularReflectance"];
+                self.ignore(ctx, props, &coating, "the coating of an approximated coating BSDF");
                 self.inner_bsdf(ctx, props, ty)?
             }
             "null" => BsdfDesc { material: None, one_sided: false, displacement: None, opacity: None, id: None },
             other @ ("phong" | "ward" | "irawan" | "hk" | "dipole" | "difftrans" | "sssbrdf" | "mixturebsdf") => {
-                for n in props.unused() {
-                    if let Some(name) = n.attribute("name") {
-                        props.named_value_present(name);
-                    }
-                }
+                let unused = props.unused();
+                let names: Vec<&str> = unused.iter().filter_map(|n| n.attribute("name")).collect();
+                self.ignore(ctx, props, &names, "a grey diffuse stands in for the unsupported BSDF");
                 self.warn_once(
                     &format!("bsdf-{other}"),
                     Some(&props.loc),
@@ -388,9 +397,8 @@ impl Loader {
                         WrapMode::Repeat
                     }
                 };
-                for name in ["filterType", "maxAnisotropy", "cache", "channel"] {
-                    props.named_value_present(name);
-                }
+                let filtering = ["filterType", "maxAnisotropy", "cache", "channel"];
+                self.ignore(ctx, &props, &filtering, "image textures are filtered bilinearly");
                 let mut t = ImageTexture::new(image);
                 t.wrap = wrap;
                 t.mapping = Self::mapping(ctx, &props, 1.0)?;
@@ -417,11 +425,9 @@ impl Loader {
                     Some(&props.loc),
                     format!("texture \"{other}\" is not supported; a constant 0.5 stands in for it"),
                 )?;
-                for n in props.unused() {
-                    if let Some(name) = n.attribute("name") {
-                        props.named_value_present(name);
-                    }
-                }
+                let unused = props.unused();
+                let names: Vec<&str> = unused.iter().filter_map(|n| n.attribute("name")).collect();
+                self.ignore(ctx, &props, &names, "a constant 0.5 stands in for the unsupported texture");
                 Texture::Constant(Rgb::splat(0.5))
             }
             other => return Err(ctx.err(&props.loc, format!("unknown texture plugin \"{other}\""))),

@@ -57,7 +57,7 @@ impl Loader {
                 let encoding = if gamma > 0.0 { ColorEncoding::Gamma(gamma as f32) } else { ColorEncoding::Srgb };
                 let image = self.image(ctx, &file, encoding, &props.loc)?;
                 let rotation = tempera::math::Mat3::from_mat4(to_world) * mitsuba_envmap_frame();
-                props.named_value_present("cache");
+                self.ignore(ctx, &props, &["cache"], "a loading hint of Mitsuba's");
                 vec![Light::Infinite(InfiniteLight::image(image, EnvironmentMap::LatLong, rotation, Rgb::splat(scale)))]
             }
             "sunsky" | "sky" | "sun" => self.sunsky(ctx, &props, &ty, &to_world)?,
@@ -108,9 +108,8 @@ impl Loader {
         };
         let sky_scale = props.float(ctx, "skyScale", 1.0)? as f32;
         let sun_scale = props.float(ctx, "sunScale", 1.0)? as f32;
-        for name in ["sunRadiusScale", "stretch", "albedo", "resolution", "extend"] {
-            props.named_value_present(name);
-        }
+        let model = ["sunRadiusScale", "stretch", "albedo", "resolution", "extend"];
+        self.ignore(ctx, props, &model, "the sky and sun are approximated (see the warning)");
         let mut out = Vec::new();
         if ty != "sun" {
             let image = Arc::new(sky::sky_image(turbidity, sun, 512, 256));

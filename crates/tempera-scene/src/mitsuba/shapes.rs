@@ -171,11 +171,9 @@ impl Loader {
                 })
             }
             "hair" | "heightfield" => {
-                for n in props.unused() {
-                    if let Some(name) = n.attribute("name") {
-                        props.named_value_present(name);
-                    }
-                }
+                let unused = props.unused();
+                let names: Vec<&str> = unused.iter().filter_map(|n| n.attribute("name")).collect();
+                self.ignore(ctx, props, &names, "the unsupported shape is skipped");
                 self.warn(Some(&props.loc), format!("shape \"{ty}\" is not supported and is skipped"))?;
                 return Ok(None);
             }

@@ -101,6 +101,58 @@ impl Loader {
 
     pub(super) fn directive(&mut self, name: &str, lx: &mut Lexer, loc: Loc) -> Result<(), LoadError> {
         match name {
+            "AttributeBegin" | "AttributeEnd" | "TransformBegin" | "TransformEnd" | "Identity" | "Translate"
+            | "Scale" | "Rotate" | "LookAt" | "Transform" | "ConcatTransform" | "CoordinateSystem"
+            | "CoordSysTransform" | "ReverseOrientation" => self.transform_directive(name, lx, loc)?,
+            "WorldBegin" => {
+                self.state.ctm = Mat4::IDENTITY;
+                self.named.coord_systems.insert("world".into(), Mat4::IDENTITY);
+                self.world_begun = true;
+            }
+            "WorldEnd" => {}
+            "Option" => self.option(lx)?,
+            "ColorSpace" => {
+                let (space, at) = string_arg(lx, "colour space")?;
+                if space != "srgb" {
+                    self.warn(Some(&at), format!("colour space \"{space}\" is not supported; using sRGB"))?;
+                }
+            }
+            "Camera" => self.camera(lx)?,
+            "Film" => self.film(lx)?,
+            "Sampler" => self.sampler(lx)?,
+            "Integrator" => self.integrator(lx)?,
+            "PixelFilter" => self.filter(lx)?,
+            "Accelerator" => {
+                string_arg(lx, "accelerator type")?;
+                ParamSet::parse(lx)?;
+            }
+            "Texture" => self.texture_directive(lx)?,
+            "Material" | "MakeNamedMaterial" | "NamedMaterial" => self.material_directive(name, lx)?,
+            "LightSource" => self.light_source(lx)?,
+            "AreaLightSource" => self.area_light_source(lx)?,
+            "Shape" => self.shape_directive(lx)?,
+            "ObjectBegin" | "ObjectEnd" | "ObjectInstance" => self.object_directive(name, lx, loc)?,
+            "Include" | "Import" => {
+                let (file, at) = string_arg(lx, "file name")?;
+                let path = self.resolve(&at, &file);
+                self.parse_file(&path, Some(&at))?;
+            }
+            "MakeNamedMedium" | "MediumInterface" => self.medium_directive(name, lx)?,
+            "TransformTimes" | "ActiveTransform" | "AttributeState" => {
+                skip_arguments(lx)?;
+                self.warn_once(name, Some(&loc), format!("{name} (motion blur) is not supported and is ignored"))?;
+            }
+            _ => {
+                skip_arguments(lx)?;
+                self.warn(Some(&loc), format!("unknown directive '{name}' ignored"))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The directives that change the transform or the attribute stack.
+    fn transform_directive(&mut self, name: &str, lx: &mut Lexer, loc: Loc) -> Result<(), LoadError> {
+        match name {
             "AttributeBegin" => self.begin(Block::Attribute, loc),
             "AttributeEnd" => self.end(Block::Attribute, &loc)?,
             "TransformBegin" => self.begin(Block::Transform, loc),
@@ -156,29 +208,14 @@ impl Loader {
                 }
             }
             "ReverseOrientation" => self.state.reverse_orientation = !self.state.reverse_orientation,
-            "WorldBegin" => {
-                self.state.ctm = Mat4::IDENTITY;
-                self.named.coord_systems.insert("world".into(), Mat4::IDENTITY);
-                self.world_begun = true;
-            }
-            "WorldEnd" => {}
-            "Option" => self.option(lx)?,
-            "ColorSpace" => {
-                let (space, at) = string_arg(lx, "colour space")?;
-                if space != "srgb" {
-                    self.warn(Some(&at), format!("colour space \"{space}\" is not supported; using sRGB"))?;
-                }
-            }
-            "Camera" => self.camera(lx)?,
-            "Film" => self.film(lx)?,
-            "Sampler" => self.sampler(lx)?,
-            "Integrator" => self.integrator(lx)?,
-            "PixelFilter" => self.filter(lx)?,
-            "Accelerator" => {
-                string_arg(lx, "accelerator type")?;
-                ParamSet::parse(lx)?;
-            }
-            "Texture" => self.texture_directive(lx)?,
+            _ => unreachable!("transform directives only"),
+        }
+        Ok(())
+    }
+
+    /// `Material`, `MakeNamedMaterial` and `NamedMaterial`.
+    fn material_directive(&mut self, name: &str, lx: &mut Lexer) -> Result<(), LoadError> {
+        match name {
             "Material" => {
                 let (ty, at) = string_arg(lx, "material type")?;
                 let params = ParamSet::parse(lx)?;
@@ -208,9 +245,14 @@ impl Loader {
                     .cloned()
                     .ok_or_else(|| LoadError::Syntax { loc: at, message: format!("unknown material \"{n}\"") })?;
             }
-            "LightSource" => self.light_source(lx)?,
-            "AreaLightSource" => self.area_light_source(lx)?,
-            "Shape" => self.shape_directive(lx)?,
+            _ => unreachable!("material directives only"),
+        }
+        Ok(())
+    }
+
+    /// Object instancing: `ObjectBegin`, `ObjectEnd` and `ObjectInstance`.
+    fn object_directive(&mut self, name: &str, lx: &mut Lexer, loc: Loc) -> Result<(), LoadError> {
+        match name {
             "ObjectBegin" => {
                 let (n, at) = string_arg(lx, "object name")?;
                 if self.object.is_some() {
@@ -234,11 +276,15 @@ impl Loader {
                 let (n, at) = string_arg(lx, "object name")?;
                 self.instance(&n, &at)?;
             }
-            "Include" | "Import" => {
-                let (file, at) = string_arg(lx, "file name")?;
-                let path = self.resolve(&at, &file);
-                self.parse_file(&path, Some(&at))?;
-            }
+            _ => unreachable!("object directives only"),
+        }
+        Ok(())
+    }
+
+    /// Participating media, which are refused with a clear message (or ignored when a
+    /// `MediumInterface` names none).
+    fn medium_directive(&mut self, name: &str, lx: &mut Lexer) -> Result<(), LoadError> {
+        match name {
             "MakeNamedMedium" => {
                 let (n, at) = string_arg(lx, "medium name")?;
                 let params = ParamSet::parse(lx)?;
@@ -261,14 +307,7 @@ impl Loader {
                     });
                 }
             }
-            "TransformTimes" | "ActiveTransform" | "AttributeState" => {
-                skip_arguments(lx)?;
-                self.warn_once(name, Some(&loc), format!("{name} (motion blur) is not supported and is ignored"))?;
-            }
-            _ => {
-                skip_arguments(lx)?;
-                self.warn(Some(&loc), format!("unknown directive '{name}' ignored"))?;
-            }
+            _ => unreachable!("medium directives only"),
         }
         Ok(())
     }

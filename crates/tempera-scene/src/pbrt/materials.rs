@@ -82,6 +82,40 @@ impl Loader {
         self.warn_once(&format!("material-{ty}"), Some(at), format!("material \"{ty}\" is approximated: {how}"))
     }
 
+    /// pbrt-v4's `coateddiffuse`, approximated analytically.
+    fn coated_diffuse(&mut self, params: &ParamSet, at: &Loc) -> Result<Material, LoadError> {
+        self.approximated("coateddiffuse", at, "analytic coated diffuse (GGX dielectric coat over Lambertian, no coat absorption or interreflection sampling)")?;
+        let layer = ["thickness", "albedo", "g", "maxdepth", "nsamples"];
+        self.ignore(params, &layer, "the analytic coated diffuse has no medium between its layers");
+        let reflectance =
+            self.spectrum_param(params, "reflectance", Some(Rgb::splat(0.5)), SpectrumUse::Unitless)?.expect("default");
+        let eta = self.eta(params, "eta", 1.5, at)?;
+        Ok(Material::CoatedDiffuse(CoatedDiffuseMaterial::new(reflectance, self.roughness(params, "")?, eta, false)))
+    }
+
+    /// pbrt-v4's `mix` of two named materials.
+    fn mix(&mut self, params: &ParamSet, at: &Loc) -> Result<Material, LoadError> {
+        let syntax = |message: String| LoadError::Syntax { loc: at.clone(), message };
+        let names = match params.find("materials").map(|p| &p.values) {
+            Some(super::params::Values::Str(v)) if v.len() == 2 => v.clone(),
+            _ => return Err(syntax("mix needs \"string materials\" with two names".into())),
+        };
+        let mut ids = [0u32; 2];
+        for (slot, name) in ids.iter_mut().zip(&names) {
+            let m = self
+                .named
+                .materials
+                .get(name)
+                .cloned()
+                .ok_or_else(|| syntax(format!("mix refers to unknown material \"{name}\"")))?;
+            *slot = self
+                .material_id(&m)
+                .ok_or_else(|| syntax("mix of an \"interface\" material is not supported".into()))?
+                .0;
+        }
+        Ok(Material::Mix(MixMaterial { materials: ids, amount: self.float_param(params, "amount", 0.5)? }))
+    }
+
     pub(super) fn make_material(&mut self, ty: &str, params: &ParamSet, at: &Loc) -> Result<MaterialSlot, LoadError> {
         let displacement = match params.params.iter().any(|p| p.name == "displacement") {
             true => Some(self.float_param(params, "displacement", 0.0)?),
@@ -103,25 +137,10 @@ impl Loader {
                 let eta = self.eta(params, "eta", 1.5, at)?;
                 Material::Dielectric(DielectricMaterial { eta, roughness: self.roughness(params, "")? })
             }
-            "coateddiffuse" => {
-                self.approximated(ty, at, "analytic coated diffuse (GGX dielectric coat over Lambertian, no coat absorption or interreflection sampling)")?;
-                for p in ["thickness", "albedo", "g", "maxdepth", "nsamples"] {
-                    params.find(p);
-                }
-                let reflectance = self
-                    .spectrum_param(params, "reflectance", Some(Rgb::splat(0.5)), SpectrumUse::Unitless)?
-                    .expect("default");
-                let eta = self.eta(params, "eta", 1.5, at)?;
-                Material::CoatedDiffuse(CoatedDiffuseMaterial::new(
-                    reflectance,
-                    self.roughness(params, "")?,
-                    eta,
-                    false,
-                ))
-            }
+            "coateddiffuse" => self.coated_diffuse(params, at)?,
             "coatedconductor" => {
                 self.approximated(ty, at, "its base conductor without the dielectric coat")?;
-                for p in [
+                let coat = [
                     "interface.roughness",
                     "interface.uroughness",
                     "interface.vroughness",
@@ -131,9 +150,8 @@ impl Loader {
                     "g",
                     "maxdepth",
                     "nsamples",
-                ] {
-                    params.find(p);
-                }
+                ];
+                self.ignore(params, &coat, "the coat of an approximated coatedconductor");
                 Material::Conductor(self.conductor(params, "conductor.")?)
             }
             "diffusetransmission" => {
@@ -148,39 +166,12 @@ impl Loader {
                     scale: params.float("scale", 1.0)? as f32,
                 })
             }
-            "mix" => {
-                let names = match params.find("materials").map(|p| &p.values) {
-                    Some(super::params::Values::Str(v)) if v.len() == 2 => v.clone(),
-                    _ => {
-                        return Err(LoadError::Syntax {
-                            loc: at.clone(),
-                            message: "mix needs \"string materials\" with two names".into(),
-                        });
-                    }
-                };
-                let mut ids = [0u32; 2];
-                for (slot, name) in ids.iter_mut().zip(&names) {
-                    let m = self.named.materials.get(name).cloned().ok_or_else(|| LoadError::Syntax {
-                        loc: at.clone(),
-                        message: format!("mix refers to unknown material \"{name}\""),
-                    })?;
-                    *slot = match self.material_id(&m) {
-                        Some(id) => id.0,
-                        None => {
-                            return Err(LoadError::Syntax {
-                                loc: at.clone(),
-                                message: "mix of an \"interface\" material is not supported".into(),
-                            });
-                        }
-                    };
-                }
-                Material::Mix(MixMaterial { materials: ids, amount: self.float_param(params, "amount", 0.5)? })
-            }
+            "mix" => self.mix(params, at)?,
             "interface" => return Ok(MaterialSlot::Interface),
             "measured" | "hair" | "subsurface" => {
-                for p in &params.params {
-                    p.mark_used();
-                }
+                let names: Vec<String> = params.params.iter().map(|p| p.name.clone()).collect();
+                let names: Vec<&str> = names.iter().map(String::as_str).collect();
+                self.ignore(params, &names, "a grey diffuse material stands in for the unsupported material");
                 self.approximated(ty, at, "a grey diffuse material stands in for it")?;
                 Material::diffuse(Rgb::splat(0.5))
             }

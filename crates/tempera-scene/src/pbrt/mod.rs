@@ -65,6 +65,16 @@ impl Loader {
         self.cx.warn_once(key, loc, message)
     }
 
+    /// Marks the parameters `names` of `params` as read and records, for those present, that
+    /// they are deliberately ignored and why.
+    fn ignore(&mut self, params: &ParamSet, names: &[&str], why: &str) {
+        for name in names {
+            if let Some(p) = params.find(name) {
+                self.cx.ignored(&p.loc, name, why);
+            }
+        }
+    }
+
     /// Warns about every parameter of `params` that no lookup used.
     fn report_unused(&mut self, params: &ParamSet, what: &str) -> Result<(), LoadError> {
         let unused: Vec<(Loc, String)> = params

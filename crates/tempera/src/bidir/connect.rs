@@ -73,6 +73,117 @@ pub struct Subpaths<'a> {
     pub camera: &'a [Vertex],
 }
 
+/// What joining the two subpaths of one strategy gives, before MIS: the unweighted value and
+/// the pieces a tempered target re-evaluates.
+struct Joined {
+    l: Rgb,
+    /// The vertex the strategy sampled (the camera for `t = 1`, the light for `s = 1`).
+    sampled: Option<Vertex>,
+    raster: Option<Vec2>,
+    f_light: Rgb,
+    f_camera: Rgb,
+    g: f32,
+    base: Rgb,
+}
+
+impl Joined {
+    fn new(l: Rgb, base: Rgb) -> Self {
+        Self { l, sampled: None, raster: None, f_light: Rgb::ONE, f_camera: Rgb::ONE, g: 1.0, base }
+    }
+}
+
+/// `s = 0`: the camera subpath's last vertex is on an emitter.
+fn hit_emitter(scene: &Scene, camera: &[Vertex], t: usize) -> Option<Joined> {
+    let pt = &camera[t - 1];
+    if !pt.is_light() {
+        return None;
+    }
+    let f_light = pt.le(scene, &camera[t - 2]);
+    Some(Joined { f_light, ..Joined::new(f_light * pt.beta, pt.beta) })
+}
+
+/// `t = 1`: the light subpath's last vertex is connected to a point sampled on the lens.
+fn reach_camera<S: Sampler>(scene: &Scene, qs: &Vertex, sampler: &mut S, rays: &mut u64) -> Option<Joined> {
+    if !qs.connectible(scene) {
+        return None;
+    }
+    sampler.start_stream(Stream::Connection);
+    let u = sampler.next_2d();
+    let cs = scene.camera.sample_wi(qs.p, u)?;
+    if cs.pdf.is_nan() || cs.pdf <= 0.0 || cs.importance.max_element() <= 0.0 {
+        return None;
+    }
+    let mut v = Vertex::camera(cs.p_lens, cs.importance / cs.pdf);
+    v.pdf_fwd = 0.0;
+    let f_light = qs.f(&v, TransportMode::Importance);
+    let cos = if qs.is_on_surface() { qs.ns.dot(cs.wi).abs() } else { 1.0 };
+    let base = qs.beta * v.beta * cos;
+    let mut l = qs.beta * f_light * v.beta;
+    if qs.is_on_surface() {
+        l *= cos;
+    }
+    if l.max_element() > 0.0 {
+        *rays += 1;
+        if !visible(scene, qs, &v) {
+            return None;
+        }
+    }
+    Some(Joined { sampled: Some(v), raster: Some(cs.raster), f_light, ..Joined::new(l, base) })
+}
+
+/// `s = 1`: the camera subpath's last vertex is connected to a point sampled on a light.
+fn reach_light<S: Sampler>(scene: &Scene, pt: &Vertex, sampler: &mut S, rays: &mut u64) -> Option<Joined> {
+    if !pt.connectible(scene) {
+        return None;
+    }
+    sampler.start_stream(Stream::Connection);
+    let u_light = sampler.next_1d();
+    let u = sampler.next_2d();
+    let (index, pmf) = scene.light_sampler.sample(u_light)?;
+    let light_ref = &scene.lights[index];
+    let ls = light_ref.sample_li(&scene.geometry, pt.p, u)?;
+    let infinite = light_ref.is_infinite() || light_ref.is_delta_direction();
+    let mut v = Vertex::light(
+        index as u32,
+        ls.p,
+        if infinite { Vec3::ZERO } else { ls.n },
+        ls.li / (ls.pdf * pmf),
+        0.0,
+        infinite,
+    );
+    v.pdf_fwd = v.pdf_light_origin(scene, pt);
+    let f_camera = pt.f(&v, TransportMode::Radiance);
+    let cos = if pt.is_on_surface() { pt.ns.dot(ls.wi).abs() } else { 1.0 };
+    let base = pt.beta * v.beta * cos;
+    let mut l = pt.beta * f_camera * v.beta;
+    if pt.is_on_surface() {
+        l *= cos;
+    }
+    if l.max_element() > 0.0 {
+        *rays += 1;
+        if !visible(scene, pt, &v) {
+            return None;
+        }
+    }
+    Some(Joined { sampled: Some(v), f_camera, ..Joined::new(l, base) })
+}
+
+/// `s, t > 1`: the two subpaths' last vertices are joined by a shadow ray.
+fn join(scene: &Scene, qs: &Vertex, pt: &Vertex, rays: &mut u64) -> Option<Joined> {
+    if !qs.connectible(scene) || !pt.connectible(scene) {
+        return None;
+    }
+    let f_light = qs.f(pt, TransportMode::Importance);
+    let f_camera = pt.f(qs, TransportMode::Radiance);
+    let l = qs.beta * f_light * f_camera * pt.beta;
+    if l.max_element() <= 0.0 {
+        return None;
+    }
+    let g = geometry(scene, qs, pt, rays);
+    let base = qs.beta * pt.beta * g;
+    Some(Joined { f_light, f_camera, g, ..Joined::new(l * g, base) })
+}
+
 /// Evaluates strategy `(s, t)`. Numbers for sampling a new endpoint (`s = 1`, `t = 1`) come
 /// from [`Stream::Connection`].
 pub fn connect<S: Sampler>(
@@ -91,98 +202,16 @@ pub fn connect<S: Sampler>(
     if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::Light {
         return None;
     }
-    let mut sampled: Option<Vertex> = None;
-    let mut raster = None;
-    let (mut f_light, mut f_camera, mut g) = (Rgb::ONE, Rgb::ONE, 1.0);
-    let base;
-    let l = if s == 0 {
-        let pt = &camera[t - 1];
-        if !pt.is_light() {
-            return None;
-        }
-        f_light = pt.le(scene, &camera[t - 2]);
-        base = pt.beta;
-        f_light * pt.beta
+    let joined = if s == 0 {
+        hit_emitter(scene, camera, t)
     } else if t == 1 {
-        let qs = &light[s - 1];
-        if !qs.connectible(scene) {
-            return None;
-        }
-        sampler.start_stream(Stream::Connection);
-        let u = sampler.next_2d();
-        let cs = scene.camera.sample_wi(qs.p, u)?;
-        if cs.pdf.is_nan() || cs.pdf <= 0.0 || cs.importance.max_element() <= 0.0 {
-            return None;
-        }
-        let mut v = Vertex::camera(cs.p_lens, cs.importance / cs.pdf);
-        v.pdf_fwd = 0.0;
-        raster = Some(cs.raster);
-        f_light = qs.f(&v, TransportMode::Importance);
-        let cos = if qs.is_on_surface() { qs.ns.dot(cs.wi).abs() } else { 1.0 };
-        base = qs.beta * v.beta * cos;
-        let mut l = qs.beta * f_light * v.beta;
-        if qs.is_on_surface() {
-            l *= cos;
-        }
-        if l.max_element() > 0.0 {
-            *rays += 1;
-            if !visible(scene, qs, &v) {
-                return None;
-            }
-        }
-        sampled = Some(v);
-        l
+        reach_camera(scene, &light[s - 1], sampler, rays)
     } else if s == 1 {
-        let pt = &camera[t - 1];
-        if !pt.connectible(scene) {
-            return None;
-        }
-        sampler.start_stream(Stream::Connection);
-        let u_light = sampler.next_1d();
-        let u = sampler.next_2d();
-        let (index, pmf) = scene.light_sampler.sample(u_light)?;
-        let light_ref = &scene.lights[index];
-        let ls = light_ref.sample_li(&scene.geometry, pt.p, u)?;
-        let infinite = light_ref.is_infinite() || light_ref.is_delta_direction();
-        let mut v = Vertex::light(
-            index as u32,
-            ls.p,
-            if infinite { Vec3::ZERO } else { ls.n },
-            ls.li / (ls.pdf * pmf),
-            0.0,
-            infinite,
-        );
-        v.pdf_fwd = v.pdf_light_origin(scene, pt);
-        f_camera = pt.f(&v, TransportMode::Radiance);
-        let cos = if pt.is_on_surface() { pt.ns.dot(ls.wi).abs() } else { 1.0 };
-        base = pt.beta * v.beta * cos;
-        let mut l = pt.beta * f_camera * v.beta;
-        if pt.is_on_surface() {
-            l *= cos;
-        }
-        if l.max_element() > 0.0 {
-            *rays += 1;
-            if !visible(scene, pt, &v) {
-                return None;
-            }
-        }
-        sampled = Some(v);
-        l
+        reach_light(scene, &camera[t - 1], sampler, rays)
     } else {
-        let (qs, pt) = (&light[s - 1], &camera[t - 1]);
-        if !qs.connectible(scene) || !pt.connectible(scene) {
-            return None;
-        }
-        f_light = qs.f(pt, TransportMode::Importance);
-        f_camera = pt.f(qs, TransportMode::Radiance);
-        let l = qs.beta * f_light * f_camera * pt.beta;
-        if l.max_element() <= 0.0 {
-            return None;
-        }
-        g = geometry(scene, qs, pt, rays);
-        base = qs.beta * pt.beta * g;
-        l * g
+        join(scene, &light[s - 1], &camera[t - 1], rays)
     };
+    let Joined { l, sampled, raster, f_light, f_camera, g, base } = joined?;
     if !l.is_finite() || l.max_element() <= 0.0 {
         return None;
     }

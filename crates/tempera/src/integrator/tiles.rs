@@ -17,6 +17,7 @@ use crate::sampler::{IndependentSampler, Sampler, Stream};
 use crate::scene::Scene;
 use crate::texture::Image;
 use rayon::prelude::*;
+use std::sync::Mutex;
 use std::time::Instant;
 
 const TILE_SIZE: u32 = 16;
@@ -39,6 +40,34 @@ struct ThreadBuffers {
     splats: SplatBuffer,
     layers: Vec<SplatBuffer>,
     paths: Paths,
+}
+
+type Size = (u32, u32);
+
+impl ThreadBuffers {
+    fn new((sw, sh): Size, layers: usize, (fw, fh): Size) -> Self {
+        let layers = (0..layers).map(|_| SplatBuffer::new(fw, fh)).collect();
+        ThreadBuffers { splats: SplatBuffer::new(sw, sh), layers, paths: Paths::default() }
+    }
+
+    /// One set of buffers per worker thread: splats of `splat_size` (empty for estimators that
+    /// do not splat) and `layers` film-size layers.
+    fn per_thread(threads: usize, splat_size: Size, layers: usize, film: Size) -> Vec<Mutex<ThreadBuffers>> {
+        (0..threads).map(|_| Mutex::new(Self::new(splat_size, layers, film))).collect()
+    }
+
+    /// The threads' buffers summed (fixed point: in any order).
+    fn merged(all: Vec<Mutex<ThreadBuffers>>, splat_size: Size, layers: usize, film: Size) -> ThreadBuffers {
+        let mut total = Self::new(splat_size, layers, film);
+        for buffers in all {
+            let buffers = buffers.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+            total.splats.merge(&buffers.splats);
+            for (sum, layer) in total.layers.iter_mut().zip(&buffers.layers) {
+                sum.merge(layer);
+            }
+        }
+        total
+    }
 }
 
 /// Estimates the radiance arriving along a camera ray.
@@ -73,6 +102,26 @@ struct Pass<'a> {
 }
 
 impl Pass<'_> {
+    /// Renders every tile in parallel. One splat buffer per worker thread, locked once per
+    /// tile (never per sample); the fixed-point sums make the merge order irrelevant.
+    fn run<E: PixelEstimator>(
+        &self,
+        estimator: &E,
+        tiles: &[Tile],
+        buffers: &[Mutex<ThreadBuffers>],
+    ) -> Vec<TileResult> {
+        tiles
+            .par_iter()
+            .copied()
+            .enumerate()
+            .map(|t| {
+                let index = rayon::current_thread_index().unwrap_or(0) % buffers.len();
+                let mut buffers = buffers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                self.render_tile(estimator, t, &mut buffers)
+            })
+            .collect()
+    }
+
     fn should_stop(&self) -> bool {
         self.render.cancelled() || self.stop_at.is_some_and(|d| Instant::now() >= d)
     }
@@ -146,12 +195,7 @@ pub fn render_tiles<E: PixelEstimator>(
     let mut stats = RenderStats::default();
     let layer_count = estimator.layers();
     let (fw, fh) = (scene.film.width, scene.film.height);
-    let thread_buffers: Vec<std::sync::Mutex<ThreadBuffers>> = (0..render.threads().max(1))
-        .map(|_| {
-            let layers = (0..layer_count).map(|_| SplatBuffer::new(fw, fh)).collect();
-            std::sync::Mutex::new(ThreadBuffers { splats: SplatBuffer::new(sw, sh), layers, paths: Paths::default() })
-        })
-        .collect();
+    let thread_buffers = ThreadBuffers::per_thread(render.threads().max(1), (sw, sh), layer_count, (fw, fh));
     let max_spp = match settings.budget {
         Budget::Samples(n) => n,
         Budget::Time(_) => u32::MAX,
@@ -177,20 +221,7 @@ pub fn render_tiles<E: PixelEstimator>(
         if render.cancelled() || (done > 0 && render.past_deadline()) {
             break;
         }
-        // One splat buffer per worker thread, locked once per tile (never per sample); the
-        // fixed-point sums make the merge order irrelevant.
-        let results: Vec<TileResult> = render.install(|| {
-            tiles
-                .par_iter()
-                .copied()
-                .enumerate()
-                .map(|t| {
-                    let index = rayon::current_thread_index().unwrap_or(0) % thread_buffers.len();
-                    let mut buffers = thread_buffers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-                    pass.render_tile(estimator, t, &mut buffers)
-                })
-                .collect()
-        });
+        let results = render.install(|| pass.run(estimator, &tiles, &thread_buffers));
         let mut finished = true;
         for (r, (row, tile)) in results.iter().zip(resume.iter_mut().zip(&tiles)) {
             film.merge(&r.buffer);
@@ -220,15 +251,7 @@ pub fn render_tiles<E: PixelEstimator>(
             break;
         }
     }
-    let mut splats = SplatBuffer::new(sw, sh);
-    let mut layers: Vec<SplatBuffer> = (0..layer_count).map(|_| SplatBuffer::new(fw, fh)).collect();
-    for buffers in thread_buffers {
-        let buffers = buffers.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
-        splats.merge(&buffers.splats);
-        for (total, layer) in layers.iter_mut().zip(&buffers.layers) {
-            total.merge(layer);
-        }
-    }
+    let ThreadBuffers { splats, layers, .. } = ThreadBuffers::merged(thread_buffers, (sw, sh), layer_count, (fw, fh));
     stats.spp_completed = done;
     stats.invalid_samples = film.invalid_samples + splats.invalid;
     render.finish(&mut stats);
