@@ -78,8 +78,7 @@ pub fn tune_together(all: &mut [Ensemble], tuning: Tuning, stop: &(dyn Fn() -> b
             break;
         }
         // One sweep of every tuning ensemble, then one step of the recursion with their mean
-        // acceptance. (Stepping once per batch of sweeps synchronises the threads less often,
-        // but the ladder lags behind: 0.05 below the target on the tuning test.)
+        // acceptance (a step per batch of sweeps lags behind the target; see the README).
         let alphas: Vec<Vec<f64>> = ensembles
             .par_iter_mut()
             .map(|e| {

@@ -22,8 +22,8 @@
 //! shrink with the render's length.)
 //!
 //! The estimator also assumes each replica's states follow its own target. Replicas that
-//! started from replica 0's distribution did not yet at short budgets, which brightened
-//! veach-ajar by 3.6 % at 10 s; every replica now restarts from the bootstrap in proportion to
+//! started from replica 0's distribution did not yet at short budgets, which biased short
+//! renders bright (see the README); every replica now restarts from the bootstrap in proportion to
 //! its own target once the ladder is frozen (see `Ensemble::restart`).
 //!
 //! The ratios are estimated per depth once the depth's shared ladder is frozen, from the

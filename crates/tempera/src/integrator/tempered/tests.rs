@@ -395,8 +395,8 @@ mod start {
 
     /// Hot replicas started where replica 0's target is large (instead of in proportion to
     /// their own, flatter targets) over-represent replica 0's modes for a while; with every
-    /// replica contributing, a short render is then too bright (by 3.6 % on veach-ajar at 10 s;
-    /// 15 % here, where the chains are short and the ladder wide and untuned). Plain MMLT
+    /// replica contributing, a short render is then too bright (by 15 % here, where the chains
+    /// are short and the ladder wide and untuned). Plain MMLT
     /// with these settings (64 mutations per pixel) lands 1.6 % below this BDPT reference.
     #[test]
     fn reused_replicas_start_in_their_own_distributions() {
