@@ -55,7 +55,7 @@ impl Integrator for MmltIntegrator {
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
-            let k = cx.k;
+            let k = cx.group.k;
             Single::start(cx, target(k))
         })
     }

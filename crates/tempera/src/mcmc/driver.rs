@@ -82,31 +82,40 @@ pub trait Walker: Send {
         Self: Sized;
 }
 
-/// What [`Walker::prepare_group`] knows of its group.
+/// A group of walkers: its index, the render's seed and the driver's settings.
+#[derive(Clone, Copy)]
 pub struct GroupContext<'a> {
     pub k: usize,
     pub seed: u64,
     pub settings: &'a ChainSettings,
 }
 
-/// Where a walker starts: walker `c` of group `k`, with the group's bootstrap values and the
+impl GroupContext<'_> {
+    /// Starts a chain under `target` from the group's bootstrap sample that `u` picks from
+    /// `starts` (a distribution over the samples), accepting with `rng`: every chain of every
+    /// Markov-chain integrator starts so.
+    pub fn start_chain<T: Target>(&self, target: &T, starts: &Distribution1D, u: f32, rng: Pcg32) -> Chain<T::State> {
+        let (index, _, _) = starts.sample_discrete(u);
+        Chain::start(target, sampler_for(self.seed, self.k, index, self.settings), rng, self.k)
+    }
+}
+
+/// Where a walker starts: walker `c` of its group, with the group's bootstrap values and the
 /// distribution of start states (in proportion to their value).
 pub struct StartContext<'a> {
-    pub k: usize,
+    pub group: GroupContext<'a>,
     pub c: usize,
-    pub seed: u64,
     pub rng: Pcg32,
     pub starts: &'a Distribution1D,
     pub bootstrap: &'a [f32],
-    pub settings: &'a ChainSettings,
 }
 
 impl StartContext<'_> {
     /// Starts a chain under `target` from a bootstrap state drawn with `rng` in proportion to
     /// its value.
     pub fn start_chain<T: Target>(&self, target: &T, mut rng: Pcg32) -> Chain<T::State> {
-        let (index, _, _) = self.starts.sample_discrete(rng.next_f32());
-        Chain::start(target, sampler_for(self.seed, self.k, index, self.settings), rng, self.k)
+        let u = rng.next_f32();
+        self.group.start_chain(target, self.starts, u, rng)
     }
 }
 
@@ -279,7 +288,8 @@ impl ChainSettings {
                 let (k, c) = (slot.group, slot.index);
                 let rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, c as u64]), 7);
                 let bootstrap = &boots[k].values;
-                start_walker(StartContext { k, c, seed, rng, starts: &starts[k], bootstrap, settings: self })
+                let group = GroupContext { k, seed, settings: self };
+                start_walker(StartContext { group, c, rng, starts: &starts[k], bootstrap })
             })
             .collect();
         let stop = || render.should_stop();

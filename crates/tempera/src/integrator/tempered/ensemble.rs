@@ -19,9 +19,7 @@ use super::{SwapKernel, swap_acceptance};
 use crate::film::SharedSplats;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
-use crate::mcmc::{
-    Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, Walker, sampler_for, target_value,
-};
+use crate::mcmc::{Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, Walker, target_value};
 use rayon::prelude::*;
 
 /// How the ensembles of a depth are run and prepared.
@@ -121,10 +119,9 @@ impl<'a> Ensemble<'a> {
     fn restart(&mut self, starts: &[Option<Distribution1D>], group: &GroupContext) {
         for (j, start) in starts.iter().enumerate() {
             let Some(start) = start else { continue };
-            let (index, _, _) = start.sample_discrete(self.rng.next_f32());
+            let u = self.rng.next_f32();
             let seed = (u64::from(self.rng.next_u32()) << 32) | u64::from(self.rng.next_u32());
-            let sampler = sampler_for(group.seed, group.k, index, group.settings);
-            let fresh = Chain::start(&self.replicas.targets[j], sampler, Pcg32::new(seed, j as u64), group.k);
+            let fresh = group.start_chain(&self.replicas.targets[j], start, u, Pcg32::new(seed, j as u64));
             self.replicas.chains[j].restart(fresh);
         }
     }

@@ -88,7 +88,7 @@ impl TemperedIntegrator {
     /// Ensemble `cx.c` of depth `cx.k`: replica 0 starts exactly as an MMLT chain, the others
     /// draw their own start states (until the depth's preparation restarts them all).
     fn start_ensemble<'a>(&self, scene: &'a Scene, ladder: &[f32], cx: StartContext) -> Ensemble<'a> {
-        let (k, c, seed) = (cx.k, cx.c, cx.seed);
+        let (k, c, seed) = (cx.group.k, cx.c, cx.group.seed);
         let ladder: &[f32] = if k == 0 { &ladder[..1] } else { ladder };
         let kernel = match self.swap {
             Swap::Neighbor => SwapKernel::Neighbor(Neighbor),
