@@ -30,9 +30,18 @@ pub struct IntegratorFlags {
     /// Tempered MMLT: how replicas exchange states (default: neighbor).
     #[arg(long, value_enum)]
     pub swap: Option<Swap>,
-    /// Tempered MMLT: fixed roughening ladder a1,a2,… of replicas 1 … K−1 (increasing, positive).
+    /// Tempered MMLT: fixed ladder of temperatures t1,t2,… of replicas 1 … K−1 (increasing,
+    /// positive; up to 1 a roughening of the connection vertices, beyond a power 1/t of the
+    /// fully roughened target).
     #[arg(long, value_parser = parse_ladder)]
     pub ladder: Option<Ladder>,
+    /// Tempered MMLT: the highest temperature the ladder tuning may reach (1: roughening only).
+    #[arg(long, value_parser = parse_temperature)]
+    pub max_temperature: Option<f32>,
+    /// Tempered MMLT: depths whose tuned ladder still swaps neighbours more often than this
+    /// run plain MMLT chains.
+    #[arg(long, value_parser = parse_probability)]
+    pub collapse_above: Option<f32>,
     /// Tempered MMLT: burn-in sweeps that tune each depth's shared ladder (0: keep the
     /// default ladder untuned; ignored with --ladder).
     #[arg(long, value_parser = clap::value_parser!(u64).range(0..=10_000_000))]
@@ -70,6 +79,8 @@ impl IntegratorFlags {
             replicas: self.replicas.map(|v| v as usize),
             swap: self.swap,
             ladder: self.ladder.as_ref().map(|l| l.0.clone()),
+            max_temperature: self.max_temperature,
+            collapse_above: self.collapse_above.map(f64::from),
             tempered_mis: self.tempered_mis,
             burn_in: self.burn_in,
             swap_target: self.swap_target.map(f64::from),
@@ -97,15 +108,22 @@ fn parse_probability(s: &str) -> Result<f32, String> {
     }
 }
 
-/// A roughening ladder from the command line.
+fn parse_temperature(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if (1.0..=1000.0).contains(&v) => Ok(v),
+        _ => Err(format!("expected a temperature in [1, 1000], got '{s}'")),
+    }
+}
+
+/// A temperature ladder from the command line.
 #[derive(Clone, Debug)]
 pub struct Ladder(pub Vec<f32>);
 
 fn parse_ladder(s: &str) -> Result<Ladder, String> {
     let values: Result<Vec<f32>, _> = s.split(',').map(|v| v.trim().parse::<f32>()).collect();
     let values = values.map_err(|_| format!("expected comma-separated numbers such as 0.02,0.06,0.18, got '{s}'"))?;
-    if values.is_empty() || values.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 10.0) {
-        return Err(format!("ladder values must lie in (0, 10], got '{s}'"));
+    if values.is_empty() || values.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 1000.0) {
+        return Err(format!("ladder values must lie in (0, 1000], got '{s}'"));
     }
     if values.windows(2).any(|w| w[1] <= w[0]) {
         return Err(format!("ladder values must increase, got '{s}'"));

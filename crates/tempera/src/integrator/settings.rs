@@ -100,8 +100,14 @@ pub struct IntegratorSettings {
     pub replicas: Option<usize>,
     /// Tempered MMLT: how replicas exchange states.
     pub swap: Option<Swap>,
-    /// Tempered MMLT: a fixed roughening ladder `a_1 … a_{K−1}` (increasing, positive).
+    /// Tempered MMLT: a fixed ladder of temperatures `τ_1 … τ_{K−1}` (increasing, positive;
+    /// up to 1 a roughening, beyond a power `1/τ` of the fully roughened target).
     pub ladder: Option<Vec<f32>>,
+    /// Tempered MMLT: the highest temperature the ladder tuning may reach (1: roughening only).
+    pub max_temperature: Option<f32>,
+    /// Tempered MMLT: depths whose tuned ladder still swaps neighbours more often than this run
+    /// plain MMLT chains.
+    pub collapse_above: Option<f64>,
     /// Tempered MMLT: which densities the tempered targets' MIS weights use.
     pub tempered_mis: Option<TemperedMis>,
     /// Tempered MMLT: burn-in sweeps that tune each depth's ladder (0: no tuning).
@@ -149,6 +155,8 @@ impl IntegratorSettings {
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
+            ("max_temperature", self.max_temperature.is_some(), tempered),
+            ("collapse_above", self.collapse_above.is_some(), tempered),
             ("tempered_mis", self.tempered_mis.is_some(), tempered),
             ("burn_in", self.burn_in.is_some(), tempered),
             ("swap_target", self.swap_target.is_some(), tempered),
@@ -171,10 +179,12 @@ impl IntegratorSettings {
         check_range("replicas", self.replicas, 1..=32)?;
         check_range("burn_in", self.burn_in, 0..=10_000_000)?;
         check_probability("swap_target", self.swap_target)?;
+        check_probability("collapse_above", self.collapse_above)?;
+        check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
         check_range("swap_every", self.swap_every, 1..=1_000_000)?;
         if let Some(ladder) = &self.ladder {
-            if ladder.is_empty() || ladder.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 10.0) {
-                return Err(format!("ladder values must lie in (0, 10], not {ladder:?}"));
+            if ladder.is_empty() || ladder.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 1000.0) {
+                return Err(format!("ladder values must lie in (0, 1000], not {ladder:?}"));
             }
             if ladder.windows(2).any(|w| w[1] <= w[0]) {
                 return Err(format!("ladder values must increase, not {ladder:?}"));
@@ -249,6 +259,8 @@ pub fn create(
                 replicas: s.replica_count().unwrap_or(m.replicas),
                 swap: s.swap.unwrap_or(m.swap),
                 ladder: s.ladder.clone().unwrap_or_default(),
+                max_temperature: s.max_temperature.unwrap_or(m.max_temperature),
+                collapse_above: s.collapse_above.or(m.collapse_above),
                 roughen_mis: s.tempered_mis.map_or(m.roughen_mis, |t| t == TemperedMis::Roughened),
                 burn_in: s.burn_in.unwrap_or(m.burn_in),
                 swap_target: s.swap_target.unwrap_or(m.swap_target),
@@ -275,6 +287,21 @@ mod tests {
             (IntegratorKind::Tempered, IntegratorSettings { ladder: Some(vec![0.3, 0.1]), ..ok.clone() }, "increase"),
             (IntegratorKind::Mmlt, IntegratorSettings { large_step: Some(0.0), ..Default::default() }, "probability"),
             (IntegratorKind::Mmlt, IntegratorSettings { chains: Some(0), ..Default::default() }, "chains must lie"),
+            (
+                IntegratorKind::Tempered,
+                IntegratorSettings { max_temperature: Some(0.5), ..Default::default() },
+                "max_temperature must lie",
+            ),
+            (
+                IntegratorKind::Tempered,
+                IntegratorSettings { collapse_above: Some(0.0), ..Default::default() },
+                "collapse_above must be a probability",
+            ),
+            (
+                IntegratorKind::Mmlt,
+                IntegratorSettings { collapse_above: Some(0.5), ..Default::default() },
+                "not a setting",
+            ),
             (
                 IntegratorKind::Tempered,
                 IntegratorSettings { swap: Some(Swap::Permutation), replicas: Some(9), ..Default::default() },

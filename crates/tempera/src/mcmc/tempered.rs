@@ -43,15 +43,36 @@ impl State for TemperedState {
     }
 }
 
-/// The target of one replica of depth `depth`.
+/// The target of one replica of depth `depth` at temperature `τ`: for `τ ≤ 1` the scene with
+/// the connection vertices roughened by `a = τ`; beyond, the fully roughened value raised to
+/// `β = 1/τ` (a flatter target where roughening alone saturates: every lobe at `α = 1`).
 #[derive(Clone, Copy)]
 pub struct TemperedTarget<'a> {
     pub scene: &'a Scene,
     pub depth: usize,
+    /// The roughening `a = min(τ, 1)` and how the roughened weights are computed.
     pub temper: Tempering,
+    /// The temperature `τ` (0: the scene itself).
+    tau: f32,
 }
 
-impl TemperedTarget<'_> {
+impl<'a> TemperedTarget<'a> {
+    /// The target of depth `depth` at temperature `tau`.
+    pub fn new(scene: &'a Scene, depth: usize, temper: Tempering, tau: f32) -> Self {
+        let mut target = Self { scene, depth, temper, tau: 0.0 };
+        target.set_temperature(tau);
+        target
+    }
+
+    pub fn temperature(&self) -> f32 {
+        self.tau
+    }
+
+    pub fn set_temperature(&mut self, tau: f32) {
+        self.tau = tau;
+        self.temper.a = tau.min(1.0);
+    }
+
     /// The value of `state` (evaluated under any replica's target) under this target; no rays.
     pub fn value_of(&self, state: &mut TemperedState) -> f32 {
         if self.temper.a <= 0.0 {
@@ -61,7 +82,8 @@ impl TemperedTarget<'_> {
         let Some(c) = &e.connection else { return 0.0 };
         let (l, w) = tempered(self.scene, state.paths.subpaths(), (e.s, e.t), c, &self.temper, &mut state.scratch);
         // An invalid value has a zero contribution.
-        e.contribution(l, w).f
+        let f = e.contribution(l, w).f;
+        if self.tau > 1.0 && f > 0.0 { f.powf(1.0 / self.tau) } else { f }
     }
 }
 
@@ -91,17 +113,15 @@ mod tests {
     fn cached_states_re_evaluate_exactly_and_cross_evaluations_match_fresh_ones() {
         let mut scene = crate::scenes::default_scene().build().unwrap();
         scene.set_resolution(32, 32);
-        let ladder = [0.0, 0.05, 0.2, 0.6];
-        let target = |depth, a, roughen_mis| TemperedTarget {
-            scene: &scene,
-            depth,
-            temper: Tempering { a, heuristic: Heuristic::Power, roughen_mis },
+        let ladder = [0.0, 0.05, 0.2, 0.6, 1.0, 4.0];
+        let target = |depth, a, roughen_mis| {
+            TemperedTarget::new(&scene, depth, Tempering { a, heuristic: Heuristic::Power, roughen_mis }, a)
         };
         let (mut nonzero, mut differs) = (0, 0);
         for roughen_mis in [true, false] {
             for i in 0..4000u64 {
                 let depth = 1 + (i % 4) as usize;
-                let j = (i / 4 % 4) as usize;
+                let j = (i / 4 % 6) as usize;
                 let fresh = || EvalContext::new(PssSampler::new(i, 0, 0.01, 0.3));
                 let mut state = target(depth, ladder[j], roughen_mis).evaluate(&mut fresh(), TemperedState::default());
                 // Replica 0's view is MMLT's target, bit for bit.

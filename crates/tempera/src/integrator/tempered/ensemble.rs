@@ -34,6 +34,8 @@ pub struct EnsembleSettings {
     pub swap_every: u64,
     /// The ladder's burn-in, if it is to be tuned.
     pub tuning: Option<Tuning>,
+    /// Run plain MMLT chains when the tuned ladder's neighbour acceptance stays above this.
+    pub collapse_above: Option<f64>,
 }
 
 pub struct Ensemble<'a> {
@@ -124,6 +126,12 @@ impl<'a> Ensemble<'a> {
             let fresh = group.start_chain(&self.replicas.targets[j], start, u, Pcg32::new(seed, j as u64));
             self.replicas.chains[j].restart(fresh);
         }
+    }
+
+    /// Keeps replica 0 alone, as a plain MMLT chain (statistics start afresh).
+    fn collapse(&mut self) {
+        self.replicas.collapse();
+        self.discard_statistics();
     }
 
     /// Burn-in statistics are discarded with its splats.
@@ -217,14 +225,22 @@ impl Walker for Ensemble<'_> {
         if ensembles.is_empty() || ensembles[0].replicas.len() < 2 {
             return (EnsembleGroup::default(), 0);
         }
-        if let Some(tuning) = ensembles[0].settings.tuning
-            && !tune_together(ensembles, tuning, stop)
-        {
-            // Stopped during the burn-in: nothing of it may show in the statistics.
-            for e in ensembles.iter_mut() {
-                e.discard_statistics();
+        if let Some(tuning) = ensembles[0].settings.tuning {
+            let Some(acceptance) = tune_together(ensembles, tuning, stop) else {
+                // Stopped during the burn-in: nothing of it may show in the statistics.
+                for e in ensembles.iter_mut() {
+                    e.discard_statistics();
+                }
+                return (EnsembleGroup::default(), 0);
+            };
+            if ensembles[0].settings.collapse_above.is_some_and(|limit| acceptance > limit) {
+                // The replicas barely differ even at the hottest ladder allowed: plain MMLT
+                // chains, continuing from replica 0's burned-in state, cost a K-th.
+                for e in ensembles.iter_mut() {
+                    e.collapse();
+                }
+                return (EnsembleGroup::default(), 0);
             }
-            return (EnsembleGroup::default(), 0);
         }
         let first = &ensembles[0];
         let k = first.replicas.len();

@@ -23,9 +23,15 @@ pub struct TemperedIntegrator {
     /// Replicas per ensemble (1: plain MMLT).
     pub replicas: usize,
     pub swap: Swap,
-    /// Roughening of replicas `1 … K−1` (`a_0 = 0`), fixed; empty: [`Self::default_ladder`],
-    /// tuned during the burn-in.
+    /// Temperatures of replicas `1 … K−1` (`τ_0 = 0`; up to 1 a roughening, beyond a power
+    /// `1/τ` of the fully roughened target), fixed; empty: [`Self::default_ladder`], tuned
+    /// during the burn-in.
     pub ladder: Vec<f32>,
+    /// The highest temperature the tuning may reach (1: roughening only).
+    pub max_temperature: f32,
+    /// A depth whose tuned ladder still swaps neighbours more often than this runs plain MMLT
+    /// chains instead of ensembles (its replicas barely differ); `None`: never.
+    pub collapse_above: Option<f64>,
     /// Recompute MIS weights from the roughened densities (default: keep the scene's, which
     /// measured better at equal time on the default scene; see the README).
     pub roughen_mis: bool,
@@ -53,6 +59,8 @@ impl TemperedIntegrator {
             replicas: 5,
             swap: Swap::Neighbor,
             ladder: Vec::new(),
+            max_temperature: 1.0,
+            collapse_above: None,
             roughen_mis: false,
             burn_in: 500,
             swap_target: 0.234,
@@ -81,7 +89,12 @@ impl TemperedIntegrator {
             calibration_samples: self.bootstrap,
             reuse_replicas: self.reuse_replicas,
             swap_every: self.swap_every.max(1),
-            tuning: tune.then_some(Tuning { sweeps: self.burn_in, target: self.swap_target }),
+            tuning: tune.then_some(Tuning {
+                sweeps: self.burn_in,
+                target: self.swap_target,
+                max_temperature: self.max_temperature,
+            }),
+            collapse_above: self.collapse_above,
         }
     }
 
@@ -97,7 +110,7 @@ impl TemperedIntegrator {
         };
         let mut replicas = Replicas { chains: Vec::with_capacity(ladder.len()), targets: Vec::new() };
         for (j, &a) in ladder.iter().enumerate() {
-            let target = TemperedTarget { scene, depth: k, temper: self.tempering(a) };
+            let target = TemperedTarget::new(scene, k, self.tempering(), a);
             let rng =
                 if j == 0 { cx.rng.clone() } else { Pcg32::new(hash(&[seed, 0x7e4b, k as u64, c as u64]), j as u64) };
             replicas.chains.push(cx.start_chain(&target, rng));
@@ -107,8 +120,8 @@ impl TemperedIntegrator {
         Ensemble::new(replicas, kernel, self.ensemble_settings(ladder.len()), rng)
     }
 
-    fn tempering(&self, a: f32) -> Tempering {
-        Tempering { a, heuristic: Heuristic::Power, roughen_mis: self.roughen_mis }
+    fn tempering(&self) -> Tempering {
+        Tempering { a: 0.0, heuristic: Heuristic::Power, roughen_mis: self.roughen_mis }
     }
 }
 
@@ -126,7 +139,7 @@ impl Integrator for TemperedIntegrator {
     ) -> Result<RenderOutput, String> {
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
         let ladder = self.ladder();
-        let main = |depth| TemperedTarget { scene, depth, temper: self.tempering(0.0) };
+        let main = |depth| TemperedTarget::new(scene, depth, self.tempering(), 0.0);
         let depths = self.max_depth as usize + 1;
         chains.render(scene, settings, control, depths, main, |cx| self.start_ensemble(scene, &ladder, cx))
     }

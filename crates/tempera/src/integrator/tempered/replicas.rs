@@ -60,9 +60,9 @@ impl<'a> Replicas<'a> {
         self.chains.is_empty()
     }
 
-    /// The roughening of every replica, `a_0 = 0` first.
+    /// The temperature of every replica, `τ_0 = 0` first.
     pub fn ladder(&self) -> Vec<f32> {
-        self.targets.iter().map(|t| t.temper.a).collect()
+        self.targets.iter().map(TemperedTarget::temperature).collect()
     }
 
     /// Cross-evaluations of the current states, computed on demand, in `cache` (reused
@@ -102,11 +102,17 @@ impl<'a> Replicas<'a> {
         }
     }
 
-    /// Sets the roughening of replicas `1 …` to `ladder` and re-values their states.
+    /// Sets the temperatures of replicas `1 …` to `ladder` and re-values their states.
     pub fn set_ladder(&mut self, ladder: &[f32]) {
-        for (j, &a) in ladder.iter().enumerate() {
-            self.targets[j + 1].temper.a = a;
+        for (j, &tau) in ladder.iter().enumerate() {
+            self.targets[j + 1].set_temperature(tau);
             self.revalue(j + 1);
         }
+    }
+
+    /// Keeps replica 0 alone: the ensemble becomes a plain MMLT chain.
+    pub fn collapse(&mut self) {
+        self.chains.truncate(1);
+        self.targets.truncate(1);
     }
 }
