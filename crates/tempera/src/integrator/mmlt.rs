@@ -5,7 +5,8 @@
 //! chains per depth, mutations allotted in proportion to `b_k`.
 
 use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
-use crate::mcmc::{ChainSettings, Contribution, EvalContext, Single, Target, evaluate};
+use crate::mcmc::direct::direct_emission;
+use crate::mcmc::{ChainSettings, Contribution, EvalContext, Moments, Single, Target, evaluate};
 use crate::scene::Scene;
 
 #[derive(Clone, Copy, Debug)]
@@ -36,6 +37,11 @@ impl Target for DepthTarget<'_> {
 
     fn evaluate(&self, cx: &mut EvalContext, _: Contribution) -> Contribution {
         evaluate(self.scene, self.depth, cx)
+    }
+
+    /// Depth 0 (emitters seen directly) from points on the emitters connected to the camera.
+    fn normaliser(&self, seed: u64, samples: usize) -> Option<(Moments, u64)> {
+        (self.depth == 0).then(|| direct_emission(self.scene, seed, samples)).flatten()
     }
 }
 

@@ -52,6 +52,9 @@ pub struct Bootstrap {
     pub sum2: f64,
     /// Samples whose value was NaN, infinite or negative.
     pub invalid: u64,
+    /// The target's own lower-variance estimator of `b` ([`Target::normaliser`]), which then
+    /// normalises the group alone.
+    pub normaliser: Option<Moments>,
 }
 
 impl Bootstrap {
@@ -70,8 +73,18 @@ impl Bootstrap {
         let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
         let sum2 = values.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>();
         let invalid = results.iter().filter(|r| r.1).count() as u64;
-        let rays = results.iter().map(|r| r.2).sum();
-        (Bootstrap { values, mean, sum2, invalid }, rays)
+        let mut rays = results.iter().map(|r| r.2).sum();
+        let normaliser = target.normaliser(seed, settings.bootstrap).map(|(m, r)| {
+            rays += r;
+            m
+        });
+        (Bootstrap { values, mean, sum2, invalid, normaliser }, rays)
+    }
+
+    /// The group's normalisation as far as the bootstrap knows it: the normaliser's mean where
+    /// the target has one, else the values' mean.
+    pub fn b(&self) -> f64 {
+        self.normaliser.map_or(self.mean, |m| m.mean_and_rel_se().0)
     }
 
     /// The moments of the values, to be refined with the large steps'.

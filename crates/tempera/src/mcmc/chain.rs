@@ -42,6 +42,12 @@ pub trait Target {
     /// Evaluates the state `cx.sampler` holds. `recycled` is a state that is no longer needed:
     /// the result may reuse its storage.
     fn evaluate(&self, cx: &mut EvalContext, recycled: Self::State) -> Self::State;
+    /// An estimator of the target's mean (the normalisation `b`) with a lower variance than
+    /// the target's own uniform samples, where the target has one: the moments of `samples`
+    /// estimates seeded by `seed`, and the rays traced.
+    fn normaliser(&self, _seed: u64, _samples: usize) -> Option<(Moments, u64)> {
+        None
+    }
 }
 
 /// A target value as the chains use it: NaN, infinite, negative and zero values all count as

@@ -228,7 +228,7 @@ impl ChainSettings {
                 b
             })
             .collect();
-        let b_total: f64 = boots.iter().map(|b| b.mean).sum();
+        let b_total: f64 = boots.iter().map(Bootstrap::b).sum();
         if b_total.is_nan() || b_total <= 0.0 {
             return Err("no light path reaches the camera (every bootstrap sample was zero)".into());
         }
@@ -237,14 +237,15 @@ impl ChainSettings {
 
     /// The walkers of every group with light: under a fixed budget each group's share of the
     /// mutations in proportion to its `b`, and no more walkers than mutations.
+    /// A group whose bootstrap holds no light has no state to start from: it gets no walkers.
     fn plan(&self, boots: &[Bootstrap], budget: Option<u64>) -> Vec<Slot> {
-        let b_total: f64 = boots.iter().map(|b| b.mean).sum();
+        let b_total: f64 = boots.iter().map(Bootstrap::b).sum();
         let mut plan = Vec::new();
         for (k, b) in boots.iter().enumerate() {
-            if b.mean <= 0.0 {
+            if b.mean <= 0.0 || b.b() <= 0.0 {
                 continue;
             }
-            let m_k = budget.map(|m| (b.mean / b_total * m as f64).round() as u64);
+            let m_k = budget.map(|m| (b.b() / b_total * m as f64).round() as u64);
             if m_k == Some(0) {
                 continue;
             }
@@ -273,8 +274,8 @@ impl ChainSettings {
         let (w, h) = (scene.film.width, scene.film.height);
         let pixels = u64::from(w) * u64::from(h);
         let (boots, mut total_rays) = self.bootstrap(seed, groups, targets)?;
-        let b_total: f64 = boots.iter().map(|b| b.mean).sum();
-        let share = |k: usize| boots[k].mean / b_total;
+        let b_total: f64 = boots.iter().map(Bootstrap::b).sum();
+        let share = |k: usize| boots[k].b() / b_total;
         let budget = match settings.budget {
             Budget::Samples(mpp) => Some(u64::from(mpp) * pixels),
             Budget::Time(_) => None,
@@ -404,7 +405,12 @@ fn develop<W: Walker>(
             prior.merge(large);
             prior.mean_and_rel_se()
         };
-        (d.b, d.b_rel_se) = refine(boot.moments(), &large[k][0]);
+        // A target's own normaliser estimates b alone; otherwise the bootstrap and the large
+        // steps do.
+        (d.b, d.b_rel_se) = match boot.normaliser {
+            Some(m) => m.mean_and_rel_se(),
+            None => refine(boot.moments(), &large[k][0]),
+        };
         d.bootstrap_samples = boot.values.len() as u64;
         d.large_step_samples = large[k][0].n;
         d.invalid += boot.invalid;

@@ -6,6 +6,7 @@
 
 pub mod bootstrap;
 pub mod chain;
+pub mod direct;
 pub mod driver;
 pub mod full;
 pub mod stats;

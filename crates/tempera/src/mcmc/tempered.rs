@@ -100,6 +100,11 @@ impl Target for TemperedTarget<'_> {
         out.value = self.value_of(&mut out);
         out
     }
+
+    /// Depth 0 (emitters seen directly), never tempered, as MMLT normalises it.
+    fn normaliser(&self, seed: u64, samples: usize) -> Option<(super::Moments, u64)> {
+        (self.depth == 0).then(|| super::direct::direct_emission(self.scene, seed, samples)).flatten()
+    }
 }
 
 #[cfg(test)]
