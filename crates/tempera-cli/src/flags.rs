@@ -63,6 +63,10 @@ pub struct IntegratorFlags {
     /// Tempered MMLT: sweeps (one mutation per replica) between swap steps.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
     pub swap_every: Option<u64>,
+    /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly (five replicas at every depth, a
+    /// roughness-only ladder tuned for 0.234, replica 0 alone writes the image).
+    #[arg(long)]
+    pub paper: bool,
 }
 
 impl IntegratorFlags {
@@ -90,6 +94,7 @@ impl IntegratorFlags {
                 _ => None,
             },
             swap_every: self.swap_every,
+            paper: self.paper.then_some(true),
         }
     }
 }

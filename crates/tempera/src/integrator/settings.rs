@@ -118,6 +118,10 @@ pub struct IntegratorSettings {
     pub reuse_replicas: Option<bool>,
     /// Tempered MMLT: sweeps between swap steps.
     pub swap_every: Option<u64>,
+    /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly — five replicas at every depth,
+    /// a roughness-only ladder tuned for a neighbour acceptance of 0.234, replica 0 alone
+    /// writing the image (the swap strategy stays free).
+    pub paper: Option<bool>,
 }
 
 fn check_range<T: PartialOrd + std::fmt::Display>(
@@ -162,6 +166,7 @@ impl IntegratorSettings {
             ("swap_target", self.swap_target.is_some(), tempered),
             ("reuse_replicas", self.reuse_replicas.is_some(), tempered),
             ("swap_every", self.swap_every.is_some(), tempered),
+            ("paper", self.paper.is_some(), tempered),
         ];
         given.iter().filter(|(_, set, applies)| *set && !applies).map(|(name, ..)| *name).collect()
     }
@@ -171,6 +176,19 @@ impl IntegratorSettings {
     pub fn validate(&self, kind: IntegratorKind) -> Result<(), String> {
         if let Some(name) = self.foreign(kind).first() {
             return Err(format!("{name} is not a setting of the {kind} integrator"));
+        }
+        if self.paper == Some(true) {
+            let fixed = [
+                ("replicas", self.replicas.is_some()),
+                ("ladder", self.ladder.is_some()),
+                ("reuse_replicas", self.reuse_replicas.is_some()),
+                ("max_temperature", self.max_temperature.is_some()),
+                ("collapse_above", self.collapse_above.is_some()),
+                ("swap_target", self.swap_target.is_some()),
+            ];
+            if let Some((name, _)) = fixed.iter().find(|f| f.1) {
+                return Err(format!("the paper's setup fixes {name}; give one or the other"));
+            }
         }
         check_range("maxdepth", self.maxdepth, 0..=100_000)?;
         check_range("bootstrap", self.bootstrap, 1..=100_000_000)?;
@@ -251,7 +269,7 @@ pub fn create(
             })
         }
         IntegratorKind::Tempered => {
-            let m = TemperedIntegrator::new(d);
+            let m = if s.paper == Some(true) { TemperedIntegrator::paper(d) } else { TemperedIntegrator::new(d) };
             Box::new(TemperedIntegrator {
                 bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
                 chains: s.chains.unwrap_or(m.chains),
