@@ -24,7 +24,7 @@ pub struct IntegratorFlags {
     /// Markov-chain integrators: probability of a large step.
     #[arg(long, value_parser = parse_probability)]
     pub large_step: Option<f32>,
-    /// Tempered MMLT: replicas per ensemble (default 5; 1 is plain MMLT).
+    /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=32))]
     pub replicas: Option<u64>,
     /// Tempered MMLT: how replicas exchange states (default: neighbor).
