@@ -206,9 +206,11 @@ impl Loader {
             "mlt" | "pssmlt" => Some(IntegratorKind::Pssmlt),
             other => IntegratorKind::from_name(other),
         };
+        if props.bool(ctx, "hideEmitters", false)? {
+            self.warn(Some(&props.loc), "hideEmitters is not supported: emitters stay visible")?;
+        }
+        self.ignore(ctx, &props, &["strictNormals"], "an option of Mitsuba's path tracers that Tempera does not offer");
         let quiet = [
-            "strictNormals",
-            "hideEmitters",
             "rrDepth",
             "photonCount",
             "maxPasses",
