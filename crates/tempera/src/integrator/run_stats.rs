@@ -87,7 +87,11 @@ pub struct DepthRecord {
     pub acceptance: Acceptance,
     pub invalid: u64,
     pub seconds: f64,
-    /// Tempered MMLT: the roughening ladder.
+    /// Time spent preparing the depth before its first mutation (tempered MMLT: burn-in and
+    /// calibration); absent when nothing was prepared.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub prepare_seconds: f64,
+    /// Tempered MMLT: the ladder of temperatures.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub ladder: Vec<f64>,
     /// Tempered MMLT with reuse: the weights' ratios `ρ_l ≈ b_l/b_0`.
@@ -120,6 +124,10 @@ pub struct SwapRecord {
     /// Permutation steps other than the identity, and that gave replica 0 a new state.
     pub non_identity_rate: f64,
     pub main_changed_rate: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 fn rate(accepted: u64, proposed: u64) -> f64 {
@@ -172,6 +180,7 @@ impl DepthRecord {
             },
             invalid: d.invalid,
             seconds: d.seconds,
+            prepare_seconds: d.prepare_seconds,
             ladder: shortest(&d.ladder),
             replica_b_ratios: shortest(&d.replica_b_ratios),
             replica_b: d.replica_b.clone(),

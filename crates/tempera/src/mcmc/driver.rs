@@ -181,10 +181,12 @@ impl Slot {
     }
 }
 
-/// A prepared group: what its walkers share, and its splat buffers (one per layer).
+/// A prepared group: what its walkers share, its splat buffers (one per layer), and the time
+/// its preparation took.
 struct Group<L> {
     shared: L,
     splats: Vec<SharedSplats>,
+    seconds: f64,
 }
 
 impl ChainSettings {
@@ -353,19 +355,20 @@ impl ChainSettings {
             slices.push((k, group));
             (rest, first) = (tail, first + n);
         }
-        let results: Vec<(usize, W::Group, u64)> = slices
+        let results: Vec<(usize, W::Group, u64, f64)> = slices
             .into_par_iter()
             .map(|(k, group)| {
+                let start = std::time::Instant::now();
                 let (shared, rays) = W::prepare_group(group, &GroupContext { k, seed, settings: self }, stop);
-                (k, shared, rays)
+                (k, shared, rays, start.elapsed().as_secs_f64())
             })
             .collect();
         let mut prepared: Vec<Option<Group<W::Group>>> = (0..groups).map(|_| None).collect();
         let mut rays = 0;
-        for (k, shared, r) in results {
+        for (k, shared, r, seconds) in results {
             rays += r;
             let splats = (0..shared.count()).map(|_| SharedSplats::new(w, h)).collect();
-            prepared[k] = Some(Group { shared, splats });
+            prepared[k] = Some(Group { shared, splats, seconds });
         }
         (prepared, rays)
     }
@@ -420,6 +423,7 @@ fn develop<W: Walker>(
         };
         invalid += d.invalid + group.splats.iter().map(SharedSplats::invalid).sum::<u64>();
         d.replica_b_ratios = group.shared.ratios().iter().map(|&r| r as f32).collect();
+        d.prepare_seconds = group.seconds;
         if d.mutations == 0 {
             continue;
         }

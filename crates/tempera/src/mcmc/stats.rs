@@ -21,6 +21,9 @@ pub struct DepthStats {
     /// Proposals whose value was NaN, infinite or negative (counted as zero).
     pub invalid: u64,
     pub seconds: f64,
+    /// Wall-clock time the group's preparation took before its first mutation (tempered MMLT:
+    /// the ladder's burn-in and the calibration), shared by all threads.
+    pub prepare_seconds: f64,
     /// Tempered MMLT: the replicas' roughening ladder (the mean over the depth's ensembles,
     /// `ladder_ensembles` of them) and what the swaps did.
     pub ladder: Vec<f32>,

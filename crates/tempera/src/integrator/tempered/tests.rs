@@ -297,6 +297,7 @@ mod integrator {
                         let expected = [0.0, 0.3, 1.0, 8.0];
                         let same = d.ladder.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-4);
                         assert!(d.ladder.len() == 4 && same, "depth {}: ladder {:?}", d.depth, d.ladder);
+                        assert!(d.prepare_seconds > 0.0, "depth {}: the calibration takes time", d.depth);
                     }
                     _ => assert!(d.ladder == vec![0.0] && d.swaps.is_none(), "depth {} not collapsed: {d:?}", d.depth),
                 }
