@@ -48,7 +48,7 @@ compare)
   strip() { python3 -c 'import json,sys
 def walk(v):
     if isinstance(v, dict):
-        return {k: walk(x) for k, x in v.items() if k not in ("seconds", "rays_per_second", "mutations_per_second")}
+        return {k: walk(x) for k, x in v.items() if not k.endswith("seconds") and k not in ("rays_per_second", "mutations_per_second")}
     if isinstance(v, list):
         return [walk(x) for x in v]
     return v

@@ -65,34 +65,36 @@ pub fn tempered(
         return (c.l, c.weight);
     }
     let Subpaths { light, camera } = paths;
-    scratch.light.clear();
-    scratch.light.extend_from_slice(&light[..s.min(light.len())]);
-    scratch.camera.clear();
-    scratch.camera.extend_from_slice(&camera[..t.min(camera.len())]);
-    // The surface-side connection vertices, roughened in the scratch copies.
-    if s >= 2 || t == 1 {
-        scratch.light[s - 1] = roughened(&light[s - 1], a);
-    }
-    if t >= 2 {
-        scratch.camera[t - 1] = roughened(&camera[t - 1], a);
-    }
-    let (f_light, f_camera) = match (s, t) {
-        (_, 1) => {
+    // The surface-side connection vertices, roughened.
+    let qs = (s >= 2 || t == 1).then(|| roughened(&light[s - 1], a));
+    let pt = (t >= 2).then(|| roughened(&camera[t - 1], a));
+    let (f_light, f_camera) = match (s, t, &qs, &pt) {
+        (_, 1, Some(qs), _) => {
             let Some(v) = &c.sampled else { return (c.l, c.weight) };
-            (scratch.light[s - 1].f(v, TransportMode::Importance), c.f_camera)
+            (qs.f(v, TransportMode::Importance), c.f_camera)
         }
-        (1, _) => {
+        (1, _, _, Some(pt)) => {
             let Some(v) = &c.sampled else { return (c.l, c.weight) };
-            (c.f_light, scratch.camera[t - 1].f(v, TransportMode::Radiance))
+            (c.f_light, pt.f(v, TransportMode::Radiance))
         }
-        _ => {
-            let (qs, pt) = (&scratch.light[s - 1], &scratch.camera[t - 1]);
-            (qs.f(pt, TransportMode::Importance), pt.f(qs, TransportMode::Radiance))
-        }
+        (_, _, Some(qs), Some(pt)) => (qs.f(pt, TransportMode::Importance), pt.f(qs, TransportMode::Radiance)),
+        _ => return (c.l, c.weight),
     };
     let l = c.base * f_light * f_camera;
     if !roughen_mis {
         return (l, c.weight);
+    }
+    // The MIS weight from the roughened densities: copies of the subpaths with the roughened
+    // connection vertices in place.
+    scratch.light.clear();
+    scratch.light.extend_from_slice(&light[..s.min(light.len())]);
+    scratch.camera.clear();
+    scratch.camera.extend_from_slice(&camera[..t.min(camera.len())]);
+    if let Some(qs) = qs {
+        scratch.light[s - 1] = qs;
+    }
+    if let Some(pt) = pt {
+        scratch.camera[t - 1] = pt;
     }
     let (light, camera) = (&scratch.light[..], &scratch.camera[..]);
     let rev =
