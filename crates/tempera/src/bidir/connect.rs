@@ -102,6 +102,25 @@ fn hit_emitter(scene: &Scene, camera: &[Vertex], t: usize) -> Option<Joined> {
     Some(Joined { f_light, ..Joined::new(f_light * pt.beta, pt.beta) })
 }
 
+/// The value of joining subpath vertex `p` (BSDF value `f` towards the sampled endpoint `v`,
+/// which lies along `w`) to `v`, and its part without the BSDF (`base`); `None` when occluded
+/// (a shadow ray is traced only for a nonzero value).
+fn reach(scene: &Scene, p: &Vertex, f: Rgb, v: &Vertex, w: Vec3, rays: &mut u64) -> Option<(Rgb, Rgb)> {
+    let cos = if p.is_on_surface() { p.ns.dot(w).abs() } else { 1.0 };
+    let base = p.beta * v.beta * cos;
+    let mut l = p.beta * f * v.beta;
+    if p.is_on_surface() {
+        l *= cos;
+    }
+    if l.max_element() > 0.0 {
+        *rays += 1;
+        if !visible(scene, p, v) {
+            return None;
+        }
+    }
+    Some((l, base))
+}
+
 /// `t = 1`: the light subpath's last vertex is connected to a point sampled on the lens.
 fn reach_camera<S: Sampler>(scene: &Scene, qs: &Vertex, sampler: &mut S, rays: &mut u64) -> Option<Joined> {
     if !qs.connectible(scene) {
@@ -116,18 +135,7 @@ fn reach_camera<S: Sampler>(scene: &Scene, qs: &Vertex, sampler: &mut S, rays: &
     let mut v = Vertex::camera(cs.p_lens, cs.importance / cs.pdf);
     v.pdf_fwd = 0.0;
     let f_light = qs.f(&v, TransportMode::Importance);
-    let cos = if qs.is_on_surface() { qs.ns.dot(cs.wi).abs() } else { 1.0 };
-    let base = qs.beta * v.beta * cos;
-    let mut l = qs.beta * f_light * v.beta;
-    if qs.is_on_surface() {
-        l *= cos;
-    }
-    if l.max_element() > 0.0 {
-        *rays += 1;
-        if !visible(scene, qs, &v) {
-            return None;
-        }
-    }
+    let (l, base) = reach(scene, qs, f_light, &v, cs.wi, rays)?;
     Some(Joined { sampled: Some(v), raster: Some(cs.raster), f_light, ..Joined::new(l, base) })
 }
 
@@ -153,18 +161,7 @@ fn reach_light<S: Sampler>(scene: &Scene, pt: &Vertex, sampler: &mut S, rays: &m
     );
     v.pdf_fwd = v.pdf_light_origin(scene, pt);
     let f_camera = pt.f(&v, TransportMode::Radiance);
-    let cos = if pt.is_on_surface() { pt.ns.dot(ls.wi).abs() } else { 1.0 };
-    let base = pt.beta * v.beta * cos;
-    let mut l = pt.beta * f_camera * v.beta;
-    if pt.is_on_surface() {
-        l *= cos;
-    }
-    if l.max_element() > 0.0 {
-        *rays += 1;
-        if !visible(scene, pt, &v) {
-            return None;
-        }
-    }
+    let (l, base) = reach(scene, pt, f_camera, &v, ls.wi, rays)?;
     Some(Joined { sampled: Some(v), f_camera, ..Joined::new(l, base) })
 }
 

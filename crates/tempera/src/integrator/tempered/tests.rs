@@ -268,29 +268,41 @@ mod integrator {
         }
     }
 
+    /// The default scene at 24² and its 512-spp BDPT render.
+    fn default_scene_and_bdpt() -> (crate::scene::Scene, RenderOutput) {
+        let mut scene = crate::scenes::default_scene().build().unwrap();
+        scene.set_resolution(24, 24);
+        let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(512), 1, 0);
+        (scene, bdpt)
+    }
+
+    /// `image` agrees with the BDPT render: image means within 3 %, 2×2 blocks within four
+    /// standard errors (plus 10 %).
+    fn assert_agrees(name: &str, image: &crate::texture::Image, bdpt: &crate::texture::Image) {
+        let mean = |img: &crate::texture::Image| {
+            img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64
+        };
+        let ratio = mean(image) / mean(bdpt);
+        assert!((ratio - 1.0).abs() < 0.03, "{name}: image mean ratio {ratio}");
+        let (a, b) = (block_stats(image, 12), block_stats(bdpt, 12));
+        for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
+            assert!((ma - mb).abs() < 4.0 * sb + 0.1 * mb, "{name} block {i}: {ma} vs {mb} ± {sb}");
+        }
+    }
+
     /// Temperatures past the roughness cap (powers `f^{1/τ}` of the fully roughened target)
     /// and depths collapsed to plain MMLT chains leave the image unbiased.
     #[test]
     fn hot_replicas_and_collapsed_depths_agree_with_bdpt() {
-        let mut scene = crate::scenes::default_scene().build().unwrap();
-        scene.set_resolution(24, 24);
+        let (scene, bdpt) = default_scene_and_bdpt();
         let cancel = AtomicBool::new(false);
         let control = RenderControl::new(&cancel, &|_| {});
-        let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(512), 1, 0);
-        let mean = |img: &crate::texture::Image| {
-            img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64
-        };
         let base = TemperedIntegrator { bootstrap: 50_000, chains: 16, ..TemperedIntegrator::new(5) };
         let hot = TemperedIntegrator { ladder: vec![0.3, 1.0, 8.0], replicas: 4, ..base.clone() };
         let collapsed = TemperedIntegrator { collapse_above: Some(0.01), max_temperature: 50.0, ..base.clone() };
         for (name, t) in [("hot", hot), ("collapsed", collapsed)] {
             let out = t.render(&scene, &settings(256, 2, 0), &control).unwrap();
-            let ratio = mean(&out.image) / mean(&bdpt.image);
-            assert!((ratio - 1.0).abs() < 0.03, "{name}: image mean ratio {ratio}");
-            let (a, b) = (block_stats(&out.image, 12), block_stats(&bdpt.image, 12));
-            for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
-                assert!((ma - mb).abs() < 4.0 * sb + 0.1 * mb, "{name} block {i}: {ma} vs {mb} ± {sb}");
-            }
+            assert_agrees(name, &out.image, &bdpt.image);
             for d in out.chains.iter().filter(|d| d.depth > 0 && d.mutations > 0) {
                 match name {
                     "hot" => {
@@ -307,24 +319,14 @@ mod integrator {
 
     #[test]
     fn every_swap_strategy_agrees_with_bdpt_and_is_deterministic() {
-        let mut scene = crate::scenes::default_scene().build().unwrap();
-        scene.set_resolution(24, 24);
+        let (scene, bdpt) = default_scene_and_bdpt();
         let cancel = AtomicBool::new(false);
         let control = RenderControl::new(&cancel, &|_| {});
-        let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(512), 1, 0);
-        let mean = |img: &crate::texture::Image| {
-            img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64
-        };
         for swap in [Swap::Neighbor, Swap::EquiEnergy, Swap::Permutation] {
             let t =
                 TemperedIntegrator { bootstrap: 50_000, chains: 16, replicas: 4, swap, ..TemperedIntegrator::new(5) };
             let out = t.render(&scene, &settings(256, 2, 0), &control).unwrap();
-            let ratio = mean(&out.image) / mean(&bdpt.image);
-            assert!((ratio - 1.0).abs() < 0.03, "{swap:?}: image mean ratio {ratio}");
-            let (a, b) = (block_stats(&out.image, 12), block_stats(&bdpt.image, 12));
-            for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
-                assert!((ma - mb).abs() < 4.0 * sb + 0.1 * mb, "{swap:?} block {i}: {ma} vs {mb} ± {sb}");
-            }
+            assert_agrees(&format!("{swap:?}"), &out.image, &bdpt.image);
             let swaps = out.chains[2].swaps.as_ref().expect("depth 2 has an ensemble");
             let accepted: u64 = swaps.accepted.iter().sum();
             assert!(swaps.steps > 0 && accepted + swaps.non_identity > 0, "{swap:?}: {swaps:?}");
