@@ -6,49 +6,51 @@ use clap::Args;
 use tempera::bidir::Heuristic;
 use tempera::integrator::{IntegratorSettings, Swap, TemperedMis};
 
-/// The flags of `tempera render` that set up the integrator.
+/// The flags of `tempera render` that set up the integrator. They are parsed as plain values;
+/// their ranges and their agreement with each other and with the integrator are checked where
+/// experiment files are checked too ([`IntegratorSettings::validate`]).
 #[derive(Args, Debug, Default)]
 pub struct IntegratorFlags {
     /// Maximum number of scattering events per path (pbrt's maxdepth; default: the scene's).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=100_000))]
+    #[arg(long)]
     pub maxdepth: Option<u32>,
     /// BDPT: multiple importance sampling heuristic (default: power).
     #[arg(long, value_enum)]
     pub mis: Option<Heuristic>,
     /// Markov-chain integrators: bootstrap samples (per path depth for MMLT).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
-    pub bootstrap: Option<u64>,
+    #[arg(long)]
+    pub bootstrap: Option<usize>,
     /// Markov-chain integrators: independent chains (per path depth for MMLT).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
-    pub chains: Option<u64>,
+    #[arg(long)]
+    pub chains: Option<usize>,
     /// Markov-chain integrators: probability of a large step.
-    #[arg(long, value_parser = parse_probability)]
+    #[arg(long)]
     pub large_step: Option<f32>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=32))]
-    pub replicas: Option<u64>,
+    #[arg(long)]
+    pub replicas: Option<usize>,
     /// Tempered MMLT: how replicas exchange states (default: neighbor).
     #[arg(long, value_enum)]
     pub swap: Option<Swap>,
     /// Tempered MMLT: fixed ladder of temperatures t1,t2,… of replicas 1 … K−1 (increasing,
     /// positive; up to 1 a roughening of the connection vertices, beyond a power 1/t of the
     /// fully roughened target).
-    #[arg(long, value_parser = parse_ladder)]
-    pub ladder: Option<Ladder>,
+    #[arg(long, value_delimiter = ',')]
+    pub ladder: Option<Vec<f32>>,
     /// Tempered MMLT: the highest temperature the ladder tuning may reach (1: roughening only).
-    #[arg(long, value_parser = parse_temperature)]
+    #[arg(long)]
     pub max_temperature: Option<f32>,
     /// Tempered MMLT: depths whose tuned ladder still swaps neighbours more often than this
     /// run plain MMLT chains.
-    #[arg(long, value_parser = parse_probability)]
-    pub collapse_above: Option<f32>,
+    #[arg(long)]
+    pub collapse_above: Option<f64>,
     /// Tempered MMLT: burn-in sweeps that tune each depth's shared ladder (0: keep the
     /// default ladder untuned; ignored with --ladder).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=10_000_000))]
+    #[arg(long)]
     pub burn_in: Option<u64>,
     /// Tempered MMLT: neighbour-swap acceptance the ladder tuning aims at.
-    #[arg(long, value_parser = parse_probability)]
-    pub swap_target: Option<f32>,
+    #[arg(long)]
+    pub swap_target: Option<f64>,
     /// Tempered MMLT: MIS weights of tempered replicas from the original (default) or the
     /// roughened densities.
     #[arg(long, value_enum)]
@@ -61,7 +63,7 @@ pub struct IntegratorFlags {
     #[arg(long, overrides_with = "reuse_replicas")]
     pub no_reuse_replicas: bool,
     /// Tempered MMLT: sweeps (one mutation per replica) between swap steps.
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    #[arg(long)]
     pub swap_every: Option<u64>,
     /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly (five replicas at every depth, a
     /// roughness-only ladder tuned for 0.234, replica 0 alone writes the image).
@@ -77,17 +79,17 @@ impl IntegratorFlags {
             maxdepth: self.maxdepth,
             mis: self.mis,
             strategy_images,
-            bootstrap: self.bootstrap.map(|v| v as usize),
-            chains: self.chains.map(|v| v as usize),
+            bootstrap: self.bootstrap,
+            chains: self.chains,
             large_step: self.large_step,
-            replicas: self.replicas.map(|v| v as usize),
+            replicas: self.replicas,
             swap: self.swap,
-            ladder: self.ladder.as_ref().map(|l| l.0.clone()),
+            ladder: self.ladder.clone(),
             max_temperature: self.max_temperature,
-            collapse_above: self.collapse_above.map(f64::from),
+            collapse_above: self.collapse_above,
             tempered_mis: self.tempered_mis,
             burn_in: self.burn_in,
-            swap_target: self.swap_target.map(f64::from),
+            swap_target: self.swap_target,
             reuse_replicas: match (self.reuse_replicas, self.no_reuse_replicas) {
                 (true, _) => Some(true),
                 (_, true) => Some(false),
@@ -104,36 +106,6 @@ pub fn parse_seconds(s: &str) -> Result<f64, String> {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err(format!("expected a positive number of seconds, got '{s}'")),
     }
-}
-
-fn parse_probability(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
-        _ => Err(format!("expected a probability in (0, 1], got '{s}'")),
-    }
-}
-
-fn parse_temperature(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if (1.0..=1000.0).contains(&v) => Ok(v),
-        _ => Err(format!("expected a temperature in [1, 1000], got '{s}'")),
-    }
-}
-
-/// A temperature ladder from the command line.
-#[derive(Clone, Debug)]
-pub struct Ladder(pub Vec<f32>);
-
-fn parse_ladder(s: &str) -> Result<Ladder, String> {
-    let values: Result<Vec<f32>, _> = s.split(',').map(|v| v.trim().parse::<f32>()).collect();
-    let values = values.map_err(|_| format!("expected comma-separated numbers such as 0.02,0.06,0.18, got '{s}'"))?;
-    if values.is_empty() || values.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 1000.0) {
-        return Err(format!("ladder values must lie in (0, 1000], got '{s}'"));
-    }
-    if values.windows(2).any(|w| w[1] <= w[0]) {
-        return Err(format!("ladder values must increase, got '{s}'"));
-    }
-    Ok(Ladder(values))
 }
 
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {

@@ -6,8 +6,7 @@
 //! light sampler, `pmf`, then by area, `p_A`) seen from the lens estimates the same quantity:
 //! `L_e(y → lens) W_e |cos θ_y| / (p_ω · p_A · pmf)` with `p_ω` the lens sample's solid-angle
 //! density at `y`, zero when occluded or off the film — exactly how light tracing splats onto
-//! the film. Camera rays find a small light rarely (the bootstrap's relative error on the
-//! default scene is about 10 % at 20,000 samples), points on the light almost always see the
+//! the film. Camera rays find a small light rarely; points on the light almost always see the
 //! lens. Environment lights are seen directly too but are not points on a surface: scenes
 //! with any keep the bootstrap's estimate.
 

@@ -305,12 +305,10 @@ impl ChainSettings {
                 render.progress(done);
             });
         };
-        let developed = |walkers: &[W], seconds: f64, cancelled: bool| {
+        // The image so far, its statistics taken `seconds` after the start.
+        let developed = |walkers: &[W], seconds: f64| {
             let out = develop(&boots, walkers, &plan, &prepared, (w, h));
-            RenderOutput {
-                stats: RenderStats { rays: out.stats.rays + total_rays, seconds, cancelled, ..out.stats },
-                ..out
-            }
+            RenderOutput { stats: RenderStats { rays: out.stats.rays + total_rays, seconds, ..out.stats }, ..out }
         };
         match budget {
             // A fixed budget: one round, each walker its share of its group's mutations.
@@ -323,11 +321,11 @@ impl ChainSettings {
                     run_round(&mut walkers, &|slot| {
                         ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1)
                     });
-                    snapshots.take(render, |seconds| developed(&walkers, seconds, false));
+                    snapshots.take(render, |seconds| developed(&walkers, seconds));
                 }
             }
         }
-        let mut out = developed(&walkers, 0.0, false);
+        let mut out = developed(&walkers, 0.0);
         render.finish(&mut out.stats);
         Ok(out)
     }

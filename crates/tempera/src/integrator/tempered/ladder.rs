@@ -58,6 +58,7 @@ impl Ladder {
     /// the ladder within `(0, max_temperature]`.
     pub fn new(ladder: &[f32], target: f64, max_temperature: f32) -> Self {
         let k = ladder.len();
+        // Rungs within the roughness range subtract in f32, as the ladder itself is stored.
         let gap = |j: usize| match ladder[j] <= 1.0 {
             true => f64::from(ladder[j] - ladder[j - 1]),
             false => heat(ladder[j]) - heat(ladder[j - 1]),
