@@ -5,7 +5,7 @@
 //! chains per depth, mutations allotted in proportion to `b_k`.
 
 use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
-use crate::mcmc::direct::direct_emission;
+use crate::mcmc::all_strategies::depth_normaliser;
 use crate::mcmc::{ChainSettings, Contribution, EvalContext, Moments, Single, Target, evaluate};
 use crate::scene::Scene;
 
@@ -39,9 +39,10 @@ impl Target for DepthTarget<'_> {
         evaluate(self.scene, self.depth, cx)
     }
 
-    /// Depth 0 (emitters seen directly) from points on the emitters connected to the camera.
+    /// Depth 0 (emitters seen directly) from points on the emitters connected to the camera,
+    /// deeper paths from every strategy of their depth at once.
     fn normaliser(&self, seed: u64, samples: usize) -> Option<(Moments, u64)> {
-        (self.depth == 0).then(|| direct_emission(self.scene, seed, samples)).flatten()
+        depth_normaliser(self.scene, self.depth, seed, samples)
     }
 }
 

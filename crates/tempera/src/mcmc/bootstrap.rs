@@ -52,8 +52,8 @@ pub struct Bootstrap {
     pub sum2: f64,
     /// Samples whose value was NaN, infinite or negative.
     pub invalid: u64,
-    /// The target's own lower-variance estimator of `b` ([`Target::normaliser`]), which then
-    /// normalises the group alone.
+    /// The target's own lower-variance estimator of `b` ([`Target::normaliser`]), combined
+    /// with the values' ([`Self::normalisation`]).
     pub normaliser: Option<Moments>,
 }
 
@@ -81,10 +81,37 @@ impl Bootstrap {
         (Bootstrap { values, mean, sum2, invalid, normaliser }, rays)
     }
 
-    /// The group's normalisation as far as the bootstrap knows it: the normaliser's mean where
-    /// the target has one, else the values' mean.
+    /// The group's normalisation as far as the bootstrap knows it.
     pub fn b(&self) -> f64 {
-        self.normaliser.map_or(self.mean, |m| m.mean_and_rel_se().0)
+        self.normalisation(&Moments::default()).0
+    }
+
+    /// The group's normalisation `b` and its relative standard error, from the bootstrap and
+    /// the large steps' values (`large`), independent uniform samples of the target. Where the
+    /// target has its own normaliser, the two independent estimates are combined with weights
+    /// inversely proportional to their variances; the values' variance is taken from the
+    /// bootstrap alone, so that the weights do not depend on the large steps they weight.
+    pub fn normalisation(&self, large: &Moments) -> (f64, f64) {
+        let mut plain = self.moments();
+        plain.merge(large);
+        let Some(normaliser) = self.normaliser else { return plain.mean_and_rel_se() };
+        let (a, rel_a) = normaliser.mean_and_rel_se();
+        let var_a = (a * rel_a).powi(2);
+        let (b, _) = plain.mean_and_rel_se();
+        let (boot, rel_boot) = self.moments().mean_and_rel_se();
+        // The per-sample variance of the values, over the samples of the plain estimate.
+        let var_b = (boot * rel_boot).powi(2) * self.values.len() as f64 / plain.n.max(1) as f64;
+        let (mean, var) = if a <= 0.0 {
+            // The normaliser saw no light where the values did: theirs is the estimate.
+            return plain.mean_and_rel_se();
+        } else if b <= 0.0 || var_a == 0.0 {
+            return normaliser.mean_and_rel_se();
+        } else if var_b == 0.0 {
+            (b, 0.0)
+        } else {
+            ((a * var_b + b * var_a) / (var_a + var_b), var_a * var_b / (var_a + var_b))
+        };
+        (mean, var.sqrt() / mean)
     }
 
     /// The moments of the values, to be refined with the large steps'.

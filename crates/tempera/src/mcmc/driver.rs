@@ -10,7 +10,9 @@
 //! `b_l / ρ_l`, where `b_l` is the mean of target `l` over the group's bootstrap and the large
 //! steps of the walkers sampling it, and `ρ_l` the ratio the walker weighted them with; a single
 //! layer is MMLT's `b_k` with `ρ_0 = 1`. Large steps are independent uniform samples, so the
-//! refined `b` does not hinge on the bootstrap. Each group's image is scaled by
+//! refined `b` does not hinge on the bootstrap. A target with a lower-variance estimator of its
+//! own `b` (MMLT's depths: [`super::all_strategies`]) has it combined with those samples. Each
+//! group's image is scaled by
 //! `N_pixels · b_l/ρ_l / M` (`M` the group's mutations).
 
 use super::bootstrap::{Bootstrap, sampler_for};
@@ -406,12 +408,7 @@ fn develop<W: Walker>(
             prior.merge(large);
             prior.mean_and_rel_se()
         };
-        // A target's own normaliser estimates b alone; otherwise the bootstrap and the large
-        // steps do.
-        (d.b, d.b_rel_se) = match boot.normaliser {
-            Some(m) => m.mean_and_rel_se(),
-            None => refine(boot.moments(), &large[k][0]),
-        };
+        (d.b, d.b_rel_se) = boot.normalisation(&large[k][0]);
         d.bootstrap_samples = boot.values.len() as u64;
         d.large_step_samples = large[k][0].n;
         d.invalid += boot.invalid;

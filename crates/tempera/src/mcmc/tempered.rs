@@ -101,9 +101,9 @@ impl Target for TemperedTarget<'_> {
         out
     }
 
-    /// Depth 0 (emitters seen directly), never tempered, as MMLT normalises it.
+    /// As MMLT normalises the depth: replica 0's target is MMLT's.
     fn normaliser(&self, seed: u64, samples: usize) -> Option<(super::Moments, u64)> {
-        (self.depth == 0).then(|| super::direct::direct_emission(self.scene, seed, samples)).flatten()
+        super::all_strategies::depth_normaliser(self.scene, self.depth, seed, samples)
     }
 }
 
