@@ -4,7 +4,7 @@
 
 use clap::Args;
 use tempera::bidir::Heuristic;
-use tempera::integrator::{IntegratorSettings, Swap, TemperedMis};
+use tempera::integrator::{IntegratorSettings, LadderTuning, Swap, TemperedMis};
 
 /// The flags of `tempera render` that set up the integrator. They are parsed as plain values;
 /// their ranges and their agreement with each other and with the integrator are checked where
@@ -44,8 +44,12 @@ pub struct IntegratorFlags {
     /// run plain MMLT chains.
     #[arg(long)]
     pub collapse_above: Option<f64>,
-    /// Tempered MMLT: burn-in sweeps that tune each depth's shared ladder (0: keep the
-    /// default ladder untuned; ignored with --ladder).
+    /// Tempered MMLT: how each depth's ladder is tuned (default: bootstrap, before the first
+    /// mutation; ignored with --ladder).
+    #[arg(long, value_enum)]
+    pub tuning: Option<LadderTuning>,
+    /// Tempered MMLT: sweeps of the burn-in that tunes each depth's ladder (implies
+    /// --tuning burn-in; default 500).
     #[arg(long)]
     pub burn_in: Option<u64>,
     /// Tempered MMLT: neighbour-swap acceptance the ladder tuning aims at.
@@ -88,6 +92,7 @@ impl IntegratorFlags {
             max_temperature: self.max_temperature,
             collapse_above: self.collapse_above,
             tempered_mis: self.tempered_mis,
+            tuning: self.tuning,
             burn_in: self.burn_in,
             swap_target: self.swap_target,
             reuse_replicas: match (self.reuse_replicas, self.no_reuse_replicas) {

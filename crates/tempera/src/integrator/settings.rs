@@ -79,6 +79,20 @@ pub enum TemperedMis {
     Roughened,
 }
 
+/// How tempered MMLT tunes each depth's ladder (without a fixed ladder).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum LadderTuning {
+    /// From the depth's bootstrap, valued under candidate temperatures, before the first sweep.
+    #[default]
+    Bootstrap,
+    /// During a burn-in of `burn_in` sweeps.
+    BurnIn,
+    /// Not at all: the default ladder as it is.
+    None,
+}
+
 /// The settings of any integrator (those another integrator has are refused by [`create`]).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -110,7 +124,10 @@ pub struct IntegratorSettings {
     pub collapse_above: Option<f64>,
     /// Tempered MMLT: which densities the tempered targets' MIS weights use.
     pub tempered_mis: Option<TemperedMis>,
-    /// Tempered MMLT: burn-in sweeps that tune each depth's ladder (0: no tuning).
+    /// Tempered MMLT: how each depth's ladder is tuned.
+    pub tuning: Option<LadderTuning>,
+    /// Tempered MMLT: the sweeps of a burn-in that tunes each depth's ladder (implies
+    /// `tuning = "burn-in"`).
     pub burn_in: Option<u64>,
     /// Tempered MMLT: the neighbour-swap acceptance the tuning aims at.
     pub swap_target: Option<f64>,
@@ -162,6 +179,7 @@ impl IntegratorSettings {
             ("max_temperature", self.max_temperature.is_some(), tempered),
             ("collapse_above", self.collapse_above.is_some(), tempered),
             ("tempered_mis", self.tempered_mis.is_some(), tempered),
+            ("tuning", self.tuning.is_some(), tempered),
             ("burn_in", self.burn_in.is_some(), tempered),
             ("swap_target", self.swap_target.is_some(), tempered),
             ("reuse_replicas", self.reuse_replicas.is_some(), tempered),
@@ -195,7 +213,10 @@ impl IntegratorSettings {
         check_range("chains", self.chains, 1..=1_000_000)?;
         check_probability("large_step", self.large_step.map(f64::from))?;
         check_range("replicas", self.replicas, 1..=32)?;
-        check_range("burn_in", self.burn_in, 0..=10_000_000)?;
+        check_range("burn_in", self.burn_in, 1..=10_000_000)?;
+        if self.burn_in.is_some() && self.tuning.is_some_and(|t| t != LadderTuning::BurnIn) {
+            return Err("burn_in is the length of the burn-in tuning; it needs tuning = burn-in".into());
+        }
         check_probability("swap_target", self.swap_target)?;
         check_probability("collapse_above", self.collapse_above)?;
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
@@ -280,6 +301,7 @@ pub fn create(
                 max_temperature: s.max_temperature.unwrap_or(m.max_temperature),
                 collapse_above: s.collapse_above.or(m.collapse_above),
                 roughen_mis: s.tempered_mis.map_or(m.roughen_mis, |t| t == TemperedMis::Roughened),
+                tuning: s.tuning.or(s.burn_in.map(|_| LadderTuning::BurnIn)).unwrap_or(m.tuning),
                 burn_in: s.burn_in.unwrap_or(m.burn_in),
                 swap_target: s.swap_target.unwrap_or(m.swap_target),
                 reuse_replicas: s.reuse_replicas.unwrap_or(m.reuse_replicas),

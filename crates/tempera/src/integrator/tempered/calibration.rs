@@ -30,6 +30,11 @@ impl Calibration {
         (Self { values: evaluated.into_iter().map(|e| e.0).collect() }, rays)
     }
 
+    /// The values under the targets `targets` (indices) only, in that order.
+    pub fn select(&self, targets: &[usize]) -> Calibration {
+        Calibration { values: self.values.iter().map(|v| targets.iter().map(|&l| v[l]).collect()).collect() }
+    }
+
     /// Replica `l`'s values over the samples.
     pub fn of(&self, l: usize) -> Vec<f32> {
         self.values.iter().map(|v| v[l]).collect()

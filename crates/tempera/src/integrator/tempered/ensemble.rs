@@ -12,14 +12,16 @@
 //! stationary distribution, and no settling sweeps are needed. Statistics start afresh.
 
 use super::calibration::Calibration;
-use super::ladder::{Tuning, tune_together};
+use super::ladder::{Tuning, TuningMethod, candidate_temperatures, ladder_from_bootstrap, tune_together};
 use super::replicas::Replicas;
 use super::reuse::Reuse;
 use super::{SwapKernel, swap_acceptance};
 use crate::film::SharedSplats;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
-use crate::mcmc::{Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, Walker, target_value};
+use crate::mcmc::{
+    Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, TemperedTarget, Walker, target_value,
+};
 use rayon::prelude::*;
 
 /// How the ensembles of a depth are run and prepared.
@@ -225,37 +227,73 @@ impl Walker for Ensemble<'_> {
         if ensembles.is_empty() || ensembles[0].replicas.len() < 2 {
             return (EnsembleGroup::default(), 0);
         }
-        if let Some(tuning) = ensembles[0].settings.tuning {
-            let Some(acceptance) = tune_together(ensembles, tuning, stop) else {
-                // Stopped during the burn-in: nothing of it may show in the statistics.
-                for e in ensembles.iter_mut() {
-                    e.discard_statistics();
+        let (k, main) = (ensembles[0].replicas.len(), ensembles[0].replicas.targets[0]);
+        let EnsembleSettings { calibration_samples: samples, tuning, collapse_above, .. } = ensembles[0].settings;
+        let (calibration, rays) = match tuning.map(|t| (t, t.method)) {
+            Some((tuning, TuningMethod::Bootstrap)) => {
+                // The bootstrap valued under every candidate temperature; the ladder chosen
+                // from it keeps the columns of its rungs.
+                let grid = candidate_temperatures(tuning.max_temperature);
+                let candidates: Vec<TemperedTarget> = grid
+                    .iter()
+                    .map(|&tau| {
+                        let mut t = main;
+                        t.set_temperature(tau);
+                        t
+                    })
+                    .collect();
+                let (all, rays) = Calibration::new(&candidates, group, samples);
+                let columns: Vec<Vec<f32>> = (0..grid.len()).map(|g| all.of(g)).collect();
+                match ladder_from_bootstrap(&columns, &grid, k, tuning) {
+                    Some((rungs, acceptance)) => {
+                        if collapse_above.is_some_and(|limit| acceptance > limit) {
+                            return collapse(ensembles, rays);
+                        }
+                        let ladder: Vec<f32> = rungs[1..].iter().map(|&g| grid[g]).collect();
+                        ensembles.par_iter_mut().for_each(|e| e.replicas.set_ladder(&ladder));
+                        (all.select(&rungs), rays)
+                    }
+                    // No light in the bootstrap, or too many replicas for the grid: the ladder
+                    // stays as given.
+                    None => Calibration::new(&ensembles[0].replicas.targets, group, samples),
                 }
-                return (EnsembleGroup::default(), 0);
-            };
-            if ensembles[0].settings.collapse_above.is_some_and(|limit| acceptance > limit) {
-                // The replicas barely differ even at the hottest ladder allowed: plain MMLT
-                // chains, continuing from replica 0's burned-in state, cost a K-th.
-                for e in ensembles.iter_mut() {
-                    e.collapse();
-                }
-                return (EnsembleGroup::default(), 0);
             }
-        }
-        let first = &ensembles[0];
-        let k = first.replicas.len();
-        let (calibration, rays) = Calibration::new(&first.replicas.targets, group, first.settings.calibration_samples);
+            Some((tuning, TuningMethod::BurnIn(sweeps))) => {
+                let Some(acceptance) = tune_together(ensembles, sweeps, tuning, stop) else {
+                    // Stopped during the burn-in: nothing of it may show in the statistics.
+                    for e in ensembles.iter_mut() {
+                        e.discard_statistics();
+                    }
+                    return (EnsembleGroup::default(), 0);
+                };
+                if collapse_above.is_some_and(|limit| acceptance > limit) {
+                    return collapse(ensembles, 0);
+                }
+                Calibration::new(&ensembles[0].replicas.targets, group, samples)
+            }
+            None => Calibration::new(&ensembles[0].replicas.targets, group, samples),
+        };
         let starts: Vec<Option<Distribution1D>> = (0..k)
             .map(|l| {
                 let values = calibration.of(l);
                 values.iter().any(|&v| v > 0.0).then(|| Distribution1D::new(&values))
             })
             .collect();
-        let reuse = first.settings.reuse_replicas.then(|| Reuse::new(&calibration, k));
+        let reuse = ensembles[0].settings.reuse_replicas.then(|| Reuse::new(&calibration, k));
         ensembles.par_iter_mut().for_each(|e| {
             e.restart(&starts, group);
             e.discard_statistics();
         });
         (EnsembleGroup { reuse }, rays)
     }
+}
+
+/// Every ensemble of a depth keeps replica 0 alone, as a plain MMLT chain: the replicas barely
+/// differ even at the hottest ladder allowed, and plain chains, continuing from replica 0's
+/// state, cost a K-th.
+fn collapse(ensembles: &mut [Ensemble], rays: u64) -> (EnsembleGroup, u64) {
+    for e in ensembles.iter_mut() {
+        e.collapse();
+    }
+    (EnsembleGroup::default(), rays)
 }

@@ -2,9 +2,11 @@
 //! determinism) with one replica ensemble per chain at every depth `k ≥ 1`; depth 0, whose
 //! only strategy has no connection vertex, runs plain MMLT chains.
 
-use super::{Ensemble, EnsembleSettings, EquiEnergy, Neighbor, Permutation, Replicas, SwapKernel, Tuning};
+use super::{
+    Ensemble, EnsembleSettings, EquiEnergy, Neighbor, Permutation, Replicas, SwapKernel, Tuning, TuningMethod,
+};
 use crate::bidir::{Heuristic, Tempering};
-use crate::integrator::{Integrator, RenderControl, RenderOutput, RenderSettings, Swap};
+use crate::integrator::{Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, Swap};
 use crate::math::rng::{Pcg32, hash};
 use crate::mcmc::{ChainSettings, StartContext, TemperedTarget};
 use crate::scene::Scene;
@@ -24,8 +26,8 @@ pub struct TemperedIntegrator {
     pub replicas: usize,
     pub swap: Swap,
     /// Temperatures of replicas `1 … K−1` (`τ_0 = 0`; up to 1 a roughening, beyond a power
-    /// `1/τ` of the fully roughened target), fixed; empty: [`Self::default_ladder`], tuned
-    /// during the burn-in.
+    /// `1/τ` of the fully roughened target), fixed; empty: [`Self::default_ladder`], tuned as
+    /// [`Self::tuning`] says.
     pub ladder: Vec<f32>,
     /// The highest temperature the tuning may reach (1: roughening only).
     pub max_temperature: f32,
@@ -35,8 +37,9 @@ pub struct TemperedIntegrator {
     /// Recompute MIS weights from the roughened densities (default: keep the scene's, which
     /// measured better at equal time on the default scene; see the README).
     pub roughen_mis: bool,
-    /// Burn-in sweeps that tune each depth's shared ladder (without a fixed ladder; 0: no
-    /// tuning).
+    /// How each depth's shared ladder is tuned (without a fixed ladder).
+    pub tuning: LadderTuning,
+    /// Sweeps of the burn-in that tunes the ladder with [`LadderTuning::BurnIn`].
     pub burn_in: u64,
     /// Neighbour-swap acceptance the tuning aims at.
     pub swap_target: f64,
@@ -64,6 +67,7 @@ impl TemperedIntegrator {
             max_temperature: 1.0,
             collapse_above: None,
             roughen_mis: false,
+            tuning: LadderTuning::Bootstrap,
             burn_in: 500,
             swap_target: 0.234,
             reuse_replicas: true,
@@ -72,10 +76,12 @@ impl TemperedIntegrator {
     }
 
     /// The setup of Šik & Křivánek 2016: five replicas at every depth, a roughness-only ladder
-    /// tuned for a neighbour acceptance of 0.234, replica 0 alone writing the image.
+    /// tuned for a neighbour acceptance of 0.234 (adaptively, during a burn-in), replica 0
+    /// alone writing the image.
     pub fn paper(max_depth: u32) -> Self {
         Self {
             replicas: 5,
+            tuning: LadderTuning::BurnIn,
             max_temperature: 1.0,
             collapse_above: None,
             swap_target: 0.234,
@@ -102,13 +108,18 @@ impl TemperedIntegrator {
 impl TemperedIntegrator {
     /// How the ensembles are run and prepared.
     fn ensemble_settings(&self, replicas: usize) -> EnsembleSettings {
-        let tune = self.ladder.is_empty() && self.burn_in > 0 && replicas > 1;
+        let method = match self.tuning {
+            LadderTuning::Bootstrap => Some(TuningMethod::Bootstrap),
+            LadderTuning::BurnIn if self.burn_in > 0 => Some(TuningMethod::BurnIn(self.burn_in)),
+            _ => None,
+        };
+        let tune = self.ladder.is_empty() && replicas > 1;
         EnsembleSettings {
             calibration_samples: self.bootstrap,
             reuse_replicas: self.reuse_replicas,
             swap_every: self.swap_every.max(1),
-            tuning: tune.then_some(Tuning {
-                sweeps: self.burn_in,
+            tuning: method.filter(|_| tune).map(|method| Tuning {
+                method,
                 target: self.swap_target,
                 max_temperature: self.max_temperature,
             }),

@@ -1,15 +1,31 @@
-//! The roughening ladder `a_0 = 0 < a_1 < … < a_{K−1}` of one depth and its tuning (Šik &
-//! Křivánek 2016; the adaptation follows Atchadé, Roberts & Rosenthal 2011): during a burn-in
-//! of `sweeps` sweeps, in which the depth's first [`TUNING_ENSEMBLES`] ensembles sweep in
+//! The roughening ladder `a_0 = 0 < a_1 < … < a_{K−1}` of one depth and its tuning for a
+//! target neighbour-swap acceptance `α*` (0.234; Šik & Křivánek 2016), in one of two ways.
+//!
+//! **From the bootstrap, before the first sweep** (the default). In an ensemble at
+//! equilibrium replicas `i` and `j` hold independent states `x ~ π_i`, `y ~ π_j`, so the
+//! expected acceptance of exchanging them is
+//! `α_ij = ∫∫ min(f_i(x) f_j(y), f_i(y) f_j(x)) dx dy / (b_i b_j)`
+//! (the Metropolis ratio times the two densities). The depth's bootstrap samples are uniform,
+//! valued under every candidate temperature without rays (a state keeps its path), and the
+//! double sum over pairs of samples estimates the integral by importance weighting. Sorted by
+//! `r = f_j/f_i`, `min(f_i(x) f_j(y), f_i(y) f_j(x)) = f_i(x) f_i(y) min(r_x, r_y)`, so the sum
+//! over all pairs costs `O(N log N)`. The rungs are then chosen one after the other on a grid
+//! of temperatures: each the hottest whose acceptance with the previous rung stays at or above
+//! `α*`, with gaps capped as below.
+//!
+//! **During a burn-in** of `sweeps` sweeps (the adaptation follows Atchadé, Roberts &
+//! Rosenthal 2011), in which the depth's first [`TUNING_ENSEMBLES`] ensembles sweep in
 //! lockstep (splats discarded), the gaps `a_j − a_{j−1}` follow a Robbins–Monro recursion on
 //! their logarithm, `ln g_j += γ_n (ᾱ_j − α*)` with `γ_n = (1 + n/10)^−0.6`, where `ᾱ_j` is
 //! the probability of exchanging replicas `j − 1` and `j` (whatever the swap strategy)
-//! averaged over those ensembles and `α*` the target (0.234). A shared ladder lets one
-//! calibration from the depth's bootstrap serve all-replica reuse, and averages out the noise
-//! of single ensembles. Wider gaps lower the acceptance, so the recursion settles where the
-//! neighbour acceptance averages `α*`; the ladder is then frozen. Gaps are capped at
-//! `1/(K−1)`: beyond `a = 1` roughening changes nothing, and on scenes whose connections are
-//! mostly diffuse the acceptance stays above `α*` even at the cap.
+//! averaged over those ensembles. A shared ladder lets one calibration from the depth's
+//! bootstrap serve all-replica reuse, and averages out the noise of single ensembles. Wider
+//! gaps lower the acceptance, so the recursion settles where the neighbour acceptance
+//! averages `α*`; the ladder is then frozen.
+//!
+//! Either way gaps are capped at `1/(K−1)` of the temperature range in the tuner's coordinate
+//! ([`heat`]): with roughening only, beyond `a = 1` nothing changes, and on scenes whose
+//! connections are mostly diffuse the acceptance stays above `α*` even at the cap.
 
 use super::ensemble::Ensemble;
 use rayon::prelude::*;
@@ -17,11 +33,18 @@ use rayon::prelude::*;
 /// Ensembles of a depth that tune its ladder in lockstep; the others take the result.
 const TUNING_ENSEMBLES: usize = 8;
 
+/// How a depth's ladder is tuned: from its bootstrap, or during a burn-in of that many
+/// sweeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TuningMethod {
+    Bootstrap,
+    BurnIn(u64),
+}
+
 /// How a depth's ladder is tuned.
 #[derive(Clone, Copy, Debug)]
 pub struct Tuning {
-    /// Burn-in sweeps.
-    pub sweeps: u64,
+    pub method: TuningMethod,
     /// Target neighbour acceptance.
     pub target: f64,
     /// The highest temperature the ladder may reach (1: roughening only).
@@ -93,12 +116,17 @@ impl Ladder {
 /// which then is frozen and given to every ensemble. Returns the neighbour acceptance over the
 /// last quarter of the burn-in (averaged over pairs and tuning ensembles), or `None` when
 /// stopped early.
-pub fn tune_together(all: &mut [Ensemble], tuning: Tuning, stop: &(dyn Fn() -> bool + Sync)) -> Option<f64> {
+pub fn tune_together(
+    all: &mut [Ensemble],
+    sweeps: u64,
+    tuning: Tuning,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<f64> {
     let (ensembles, rest) = all.split_at_mut(all.len().min(TUNING_ENSEMBLES));
     let mut ladder = Ladder::new(&ensembles[0].replicas.ladder(), tuning.target, tuning.max_temperature);
-    let settled = tuning.sweeps - tuning.sweeps / 4;
+    let settled = sweeps - sweeps / 4;
     let (mut sum, mut n) = (0.0, 0u64);
-    for sweep in 0..tuning.sweeps {
+    for sweep in 0..sweeps {
         if stop() {
             return None;
         }
@@ -122,4 +150,135 @@ pub fn tune_together(all: &mut [Ensemble], tuning: Tuning, stop: &(dyn Fn() -> b
     let values = ensembles[0].replicas.ladder()[1..].to_vec();
     rest.par_iter_mut().for_each(|e| e.replicas.set_ladder(&values));
     Some(if n > 0 { sum / n as f64 } else { 0.0 })
+}
+
+/// The temperatures a ladder tuned from the bootstrap chooses from: 0, then roughenings from
+/// 0.004 growing by a quarter up to 1, then (up to `max_temperature`) powers spaced by an
+/// eighth in the tuner's coordinate (`τ` growing by `e^{1/2}` each).
+pub fn candidate_temperatures(max_temperature: f32) -> Vec<f32> {
+    let mut grid = vec![0.0f32];
+    let mut a = 0.004f32;
+    while a < 0.95 {
+        grid.push(a);
+        a *= 1.25;
+    }
+    grid.push(1.0);
+    let top = heat(max_temperature);
+    let mut h = 1.125;
+    while h < top - 1e-6 {
+        grid.push(temperature(h));
+        h += 0.125;
+    }
+    if max_temperature > 1.0 {
+        grid.push(max_temperature);
+    }
+    grid
+}
+
+/// The expected acceptance of exchanging the states of replicas with targets `f_i` and `f_j`
+/// at equilibrium, estimated from the two targets' values over the same uniform samples
+/// (`fi[n]`, `fj[n]`: sample `n`), pairs of distinct samples only; `None` when either target
+/// is zero on every sample.
+pub fn estimated_acceptance(fi: &[f32], fj: &[f32]) -> Option<f64> {
+    let (sum_i, sum_j): (f64, f64) =
+        fi.iter().zip(fj).fold((0.0, 0.0), |(a, b), (&x, &y)| (a + f64::from(x), b + f64::from(y)));
+    let diagonal: f64 = fi.iter().zip(fj).map(|(&x, &y)| f64::from(x) * f64::from(y)).sum();
+    let denominator = sum_i * sum_j - diagonal;
+    if denominator.is_nan() || denominator <= 0.0 {
+        return None;
+    }
+    // Only samples where both targets are positive contribute: the minimum is 0 otherwise.
+    let mut both: Vec<(f64, f64, f64)> = fi
+        .iter()
+        .zip(fj)
+        .filter(|&(&x, &y)| x > 0.0 && y > 0.0)
+        .map(|(&x, &y)| (f64::from(y) / f64::from(x), f64::from(x), f64::from(y)))
+        .collect();
+    both.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // Σ over ordered pairs x ≠ y of f_i(x) f_i(y) min(r_x, r_y): with r ascending, each pair
+    // counts twice as f_j(x) f_i(y) for x before y.
+    let mut after = both.iter().map(|b| b.1).sum::<f64>();
+    let mut numerator = 0.0;
+    for &(_, x_i, x_j) in &both {
+        after -= x_i;
+        numerator += 2.0 * x_j * after;
+    }
+    Some((numerator / denominator).clamp(0.0, 1.0))
+}
+
+/// A ladder of `replicas` rungs chosen from `grid` (temperatures, `grid[0] = 0`) given each
+/// candidate's values over the bootstrap (`columns[g]`): rung after rung, the hottest
+/// candidate whose estimated acceptance with the rung before is still at least `tuning.target`
+/// (the next candidate when none is), gaps capped at `1/(K−1)` of the range in [`heat`].
+/// Returns the rungs' grid indices and the mean estimated neighbour acceptance; `None` when
+/// the depth's bootstrap saw no light or the grid has too few candidates.
+pub fn ladder_from_bootstrap(
+    columns: &[Vec<f32>],
+    grid: &[f32],
+    replicas: usize,
+    tuning: Tuning,
+) -> Option<(Vec<usize>, f64)> {
+    let top = grid.len() - 1;
+    let max_gap = heat(tuning.max_temperature) / (replicas - 1) as f64 + 1e-6;
+    let mut rungs = vec![0usize];
+    let mut acceptances = Vec::with_capacity(replicas - 1);
+    for j in 1..replicas {
+        let prev = rungs[j - 1];
+        // Leave one candidate for each rung still to come.
+        let last = (top + j + 1).saturating_sub(replicas);
+        let reachable = (prev + 1..=last).take_while(|&g| heat(grid[g]) - heat(grid[prev]) <= max_gap);
+        let mut chosen = None;
+        for g in reachable {
+            let alpha = estimated_acceptance(&columns[prev], &columns[g])?;
+            if alpha < tuning.target && chosen.is_some() {
+                break;
+            }
+            chosen = Some((g, alpha));
+            if alpha < tuning.target {
+                break;
+            }
+        }
+        let (g, alpha) = match chosen {
+            Some(c) => c,
+            // No candidate within the gap cap (a coarse grid for many replicas): the next one,
+            // if there is one.
+            None if prev < top => (prev + 1, estimated_acceptance(&columns[prev], &columns[prev + 1])?),
+            None => return None,
+        };
+        rungs.push(g);
+        acceptances.push(alpha);
+    }
+    Some((rungs, acceptances.iter().sum::<f64>() / acceptances.len().max(1) as f64))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::rng::Pcg32;
+
+    /// The sorted-sum estimate equals the plain double sum over pairs of distinct samples,
+    /// with zeros in either target among the samples.
+    #[test]
+    fn estimated_acceptance_is_the_pairwise_sum() {
+        let mut rng = Pcg32::new(3, 1);
+        let mut draw = |zero: f32| -> Vec<f32> {
+            (0..300).map(|_| if rng.next_f32() < zero { 0.0 } else { rng.next_f32().powi(3) * 10.0 }).collect()
+        };
+        for (zi, zj) in [(0.0, 0.0), (0.3, 0.1), (0.8, 0.5)] {
+            let (fi, fj) = (draw(zi), draw(zj));
+            let (mut num, mut den) = (0.0f64, 0.0f64);
+            for x in 0..fi.len() {
+                for y in 0..fi.len() {
+                    if x != y {
+                        let (a, b) = (f64::from(fi[x]) * f64::from(fj[y]), f64::from(fi[y]) * f64::from(fj[x]));
+                        num += a.min(b);
+                        den += a;
+                    }
+                }
+            }
+            let estimate = estimated_acceptance(&fi, &fj).unwrap();
+            assert!((estimate - num / den).abs() < 1e-9, "{estimate} vs {}", num / den);
+        }
+        assert_eq!(estimated_acceptance(&[0.0, 0.0], &[1.0, 2.0]), None);
+    }
 }

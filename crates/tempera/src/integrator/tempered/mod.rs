@@ -30,7 +30,7 @@ mod tests;
 pub use ensemble::{Ensemble, EnsembleGroup, EnsembleSettings};
 pub use equi_energy::EquiEnergy;
 pub use integrator::TemperedIntegrator;
-pub use ladder::{Ladder, Tuning};
+pub use ladder::{Ladder, Tuning, TuningMethod};
 pub use neighbor::Neighbor;
 pub use permutation::Permutation;
 pub use replicas::{Replicas, apply_permutation};

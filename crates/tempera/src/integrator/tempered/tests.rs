@@ -508,8 +508,15 @@ mod tuning {
         let cancel = AtomicBool::new(false);
         let control = RenderControl::new(&cancel, &|_| {});
         let run = |burn_in| {
-            let t =
-                TemperedIntegrator { bootstrap: 20_000, chains: 8, replicas: 4, burn_in, ..TemperedIntegrator::new(3) };
+            let tuning = if burn_in > 0 { LadderTuning::BurnIn } else { LadderTuning::None };
+            let t = TemperedIntegrator {
+                bootstrap: 20_000,
+                chains: 8,
+                replicas: 4,
+                tuning,
+                burn_in,
+                ..TemperedIntegrator::new(3)
+            };
             let settings = RenderSettings { budget: Budget::Samples(16), seed: 5, threads: 0 };
             let out = t.render(scene, &settings, &control).unwrap();
             let d = &out.chains[2];
@@ -545,6 +552,7 @@ mod tuning {
                 bootstrap: 20_000,
                 chains: 8,
                 replicas: 4,
+                tuning: LadderTuning::BurnIn,
                 burn_in: 2000,
                 swap_target,
                 ..TemperedIntegrator::new(3)
@@ -553,6 +561,34 @@ mod tuning {
             let out = t.render(&scene, &settings, &control).unwrap();
             let d = &out.chains[2];
             (d.swaps.as_ref().unwrap().neighbor_acceptance(), d.ladder.clone())
+        };
+        let (acc8, ladder8) = run(0.8);
+        let (acc9, ladder9) = run(0.9);
+        assert!((acc8 - 0.8).abs() < 0.05, "target 0.8: {acc8} with {ladder8:?}");
+        assert!((acc9 - 0.9).abs() < 0.05, "target 0.9: {acc9} with {ladder9:?}");
+        assert!(ladder8[3] < 0.9 && ladder9[3] < ladder8[3], "{ladder8:?} {ladder9:?}");
+    }
+
+    /// Tuned from the bootstrap, before any sweep: the neighbour acceptance the render then
+    /// measures is the target within ±0.05 where roughening can reach it, and a higher target
+    /// gives a narrower ladder, as with the burn-in.
+    #[test]
+    fn the_bootstrap_tuned_ladder_reaches_a_reachable_target_acceptance() {
+        let scene = glossy_corner(0.08);
+        let cancel = AtomicBool::new(false);
+        let control = RenderControl::new(&cancel, &|_| {});
+        let run = |swap_target| {
+            let t = TemperedIntegrator {
+                bootstrap: 20_000,
+                chains: 8,
+                replicas: 4,
+                tuning: LadderTuning::Bootstrap,
+                swap_target,
+                ..TemperedIntegrator::new(3)
+            };
+            let settings = RenderSettings { budget: Budget::Samples(128), seed: 5, threads: 0 };
+            let out = t.render(&scene, &settings, &control).unwrap();
+            (out.chains[2].swaps.as_ref().unwrap().neighbor_acceptance(), out.chains[2].ladder.clone())
         };
         let (acc8, ladder8) = run(0.8);
         let (acc9, ladder9) = run(0.9);
