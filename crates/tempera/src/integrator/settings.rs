@@ -94,50 +94,69 @@ pub enum LadderTuning {
 }
 
 /// The settings of any integrator (those another integrator has are refused by [`create`]).
+/// Absent settings are left out when serialised, so that a record of the settings given (an
+/// experiment's cache keys) stays the same when new settings appear.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct IntegratorSettings {
     /// Maximum number of scattering events per path (pbrt's `maxdepth`; absent: the scene's).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub maxdepth: Option<u32>,
     /// BDPT: the MIS heuristic.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub mis: Option<Heuristic>,
     /// BDPT: also produce one image per strategy (an output option, not a setting of files).
     #[serde(skip)]
     pub strategy_images: bool,
     /// Markov-chain integrators: bootstrap samples (per depth for MMLT).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub bootstrap: Option<usize>,
     /// Markov-chain integrators: independent chains (per depth for MMLT).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub chains: Option<usize>,
     /// Markov-chain integrators: the probability of a large step.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub large_step: Option<f32>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
     /// Tempered MMLT: how replicas exchange states.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub swap: Option<Swap>,
     /// Tempered MMLT: a fixed ladder of temperatures `τ_1 … τ_{K−1}` (increasing, positive;
     /// up to 1 a roughening, beyond a power `1/τ` of the fully roughened target).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub ladder: Option<Vec<f32>>,
     /// Tempered MMLT: the highest temperature the ladder tuning may reach (1: roughening only).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max_temperature: Option<f32>,
     /// Tempered MMLT: depths whose tuned ladder still swaps neighbours more often than this run
     /// plain MMLT chains.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub collapse_above: Option<f64>,
     /// Tempered MMLT: which densities the tempered targets' MIS weights use.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub tempered_mis: Option<TemperedMis>,
     /// Tempered MMLT: how each depth's ladder is tuned.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub tuning: Option<LadderTuning>,
     /// Tempered MMLT: the sweeps of a burn-in that tunes each depth's ladder (implies
     /// `tuning = "burn-in"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub burn_in: Option<u64>,
     /// Tempered MMLT: the neighbour-swap acceptance the tuning aims at.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub swap_target: Option<f64>,
     /// Tempered MMLT: every replica contributes to the image.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub reuse_replicas: Option<bool>,
     /// Tempered MMLT: sweeps between swap steps.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub swap_every: Option<u64>,
     /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly — five replicas at every depth,
     /// a roughness-only ladder tuned for a neighbour acceptance of 0.234, replica 0 alone
     /// writing the image (the swap strategy stays free).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub paper: Option<bool>,
 }
 
@@ -316,6 +335,22 @@ pub fn create(
 mod tests {
     use super::*;
 
+    /// Only the settings given are serialised, so records of them (cache keys) do not change
+    /// when a setting is added; they read back as they were.
+    #[test]
+    fn absent_settings_are_left_out_when_serialised() {
+        let given = IntegratorSettings {
+            replicas: Some(2),
+            tuning: Some(LadderTuning::BurnIn),
+            burn_in: Some(40),
+            ..Default::default()
+        };
+        let json = serde_json::to_string(&given).unwrap();
+        assert_eq!(json, r#"{"replicas":2,"tuning":"burn-in","burn_in":40}"#);
+        assert_eq!(serde_json::from_str::<IntegratorSettings>(&json).unwrap(), given);
+        assert_eq!(serde_json::to_string(&IntegratorSettings::default()).unwrap(), "{}");
+    }
+
     #[test]
     fn settings_are_checked_against_the_integrator_and_each_other() {
         let ok = IntegratorSettings { replicas: Some(3), ladder: Some(vec![0.1, 0.3]), ..Default::default() };
@@ -341,6 +376,11 @@ mod tests {
                 IntegratorKind::Mmlt,
                 IntegratorSettings { collapse_above: Some(0.5), ..Default::default() },
                 "not a setting",
+            ),
+            (
+                IntegratorKind::Tempered,
+                IntegratorSettings { tuning: Some(LadderTuning::Bootstrap), burn_in: Some(100), ..Default::default() },
+                "needs tuning = burn-in",
             ),
             (
                 IntegratorKind::Tempered,
