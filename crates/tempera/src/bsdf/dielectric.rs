@@ -6,6 +6,25 @@
 use super::{BsdfSample, Ggx, TransportMode, fresnel, same_hemisphere};
 use crate::math::{Rgb, Vec2, Vec3};
 
+/// Which lobes of a dielectric interface to sample or value (layered BSDFs ask for one).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Lobes {
+    pub reflection: bool,
+    pub transmission: bool,
+}
+
+impl Lobes {
+    pub const ALL: Lobes = Lobes { reflection: true, transmission: true };
+    pub const REFLECTION: Lobes = Lobes { reflection: true, transmission: false };
+    pub const TRANSMISSION: Lobes = Lobes { reflection: false, transmission: true };
+
+    /// The probabilities of choosing reflection and transmission, given the Fresnel terms,
+    /// with the lobes not asked for at zero.
+    fn weights(self, r: f32, t: f32) -> (f32, f32) {
+        (if self.reflection { r } else { 0.0 }, if self.transmission { t } else { 0.0 })
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct Dielectric {
     pub distribution: Ggx,
@@ -64,6 +83,11 @@ impl Dielectric {
     }
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdf_lobes(wo, wi, Lobes::ALL)
+    }
+
+    /// The density of [`Self::sample_lobes`] with `lobes`.
+    pub fn pdf_lobes(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
         if self.is_delta() {
             return 0.0;
         }
@@ -71,33 +95,46 @@ impl Dielectric {
             return 0.0;
         };
         let r = fresnel::dielectric(wo.dot(wm), self.eta);
-        let t = 1.0 - r;
+        let (pr, pt) = lobes.weights(r, 1.0 - r);
+        if pr + pt == 0.0 {
+            return 0.0;
+        }
         let pdf = if reflect {
-            self.distribution.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * r / (r + t)
+            self.distribution.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr / (pr + pt)
         } else {
             let dwm_dwi = wi.dot(wm).abs() / (wi.dot(wm) + wo.dot(wm) / etap).powi(2);
-            self.distribution.pdf(wo, wm) * dwm_dwi * t / (r + t)
+            self.distribution.pdf(wo, wm) * dwm_dwi * pt / (pr + pt)
         };
         if pdf.is_finite() { pdf } else { 0.0 }
     }
 
     pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        self.sample_lobes(wo, uc, u, mode, Lobes::ALL)
+    }
+
+    /// Samples reflection or transmission (with probabilities in proportion to the Fresnel
+    /// terms of the lobes asked for).
+    pub fn sample_lobes(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode, lobes: Lobes) -> Option<BsdfSample> {
         if wo.z == 0.0 {
             return None;
         }
         if self.is_delta() {
-            return self.sample_smooth(wo, uc, mode);
+            return self.sample_smooth(wo, uc, mode, lobes);
         }
         let wm = self.distribution.sample_wm(wo, u);
         let r = fresnel::dielectric(wo.dot(wm), self.eta);
         let t = 1.0 - r;
-        if uc < r / (r + t) {
+        let (pr, pt) = lobes.weights(r, t);
+        if pr + pt == 0.0 {
+            return None;
+        }
+        if uc < pr / (pr + pt) {
             let wi = crate::math::reflect(wo, wm);
             if !same_hemisphere(wo, wi) {
                 return None;
             }
             let d = &self.distribution;
-            let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * r / (r + t);
+            let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr / (pr + pt);
             let f = d.d(wm) * d.g(wo, wi) * r / (4.0 * wi.z * wo.z).abs();
             Some(BsdfSample { f: Rgb::splat(f), wi, pdf, delta: false, transmission: false })
         } else {
@@ -108,7 +145,7 @@ impl Dielectric {
             let d = &self.distribution;
             let denom = (wi.dot(wm) + wo.dot(wm) / etap).powi(2);
             let dwm_dwi = wi.dot(wm).abs() / denom;
-            let pdf = d.pdf(wo, wm) * dwm_dwi * t / (r + t);
+            let pdf = d.pdf(wo, wm) * dwm_dwi * pt / (pr + pt);
             let mut ft = t * d.d(wm) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / (wi.z * wo.z * denom)).abs();
             if mode == TransportMode::Radiance {
                 ft /= etap * etap;
@@ -117,15 +154,19 @@ impl Dielectric {
         }
     }
 
-    fn sample_smooth(&self, wo: Vec3, uc: f32, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample_smooth(&self, wo: Vec3, uc: f32, mode: TransportMode, lobes: Lobes) -> Option<BsdfSample> {
         let r = fresnel::dielectric(wo.z, self.eta);
         let t = 1.0 - r;
-        if uc < r / (r + t) {
+        let (pr, pt) = lobes.weights(r, t);
+        if pr + pt == 0.0 {
+            return None;
+        }
+        if uc < pr / (pr + pt) {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
             return Some(BsdfSample {
                 f: Rgb::splat(r / wi.z.abs()),
                 wi,
-                pdf: r / (r + t),
+                pdf: pr / (pr + pt),
                 delta: true,
                 transmission: false,
             });
@@ -135,6 +176,6 @@ impl Dielectric {
         if mode == TransportMode::Radiance {
             ft /= etap * etap;
         }
-        Some(BsdfSample { f: Rgb::splat(ft), wi, pdf: t / (r + t), delta: true, transmission: true })
+        Some(BsdfSample { f: Rgb::splat(ft), wi, pdf: pt / (pr + pt), delta: true, transmission: true })
     }
 }

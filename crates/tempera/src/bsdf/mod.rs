@@ -7,6 +7,7 @@ pub mod dielectric;
 pub mod diffuse;
 pub mod diffuse_transmission;
 pub mod fresnel;
+pub mod layered;
 pub mod microfacet;
 pub mod plastic;
 
