@@ -4,7 +4,7 @@
 
 use clap::Args;
 use tempera::bidir::Heuristic;
-use tempera::integrator::{IntegratorSettings, LadderTuning, Swap, TemperedMis};
+use tempera::integrator::{Allocation, IntegratorSettings, LadderTuning, Swap, TemperedMis};
 
 /// The flags of `tempera render` that set up the integrator. They are parsed as plain values;
 /// their ranges and their agreement with each other and with the integrator are checked where
@@ -26,6 +26,10 @@ pub struct IntegratorFlags {
     /// Markov-chain integrators: probability of a large step.
     #[arg(long)]
     pub large_step: Option<f32>,
+    /// MMLT and tempered MMLT: how mutations are allotted to path depths: in proportion to their
+    /// normalisation b_k (default), or to b_k times the spread of their light over their paths.
+    #[arg(long, value_enum)]
+    pub allocation: Option<Allocation>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long)]
     pub replicas: Option<usize>,
@@ -86,6 +90,7 @@ impl IntegratorFlags {
             bootstrap: self.bootstrap,
             chains: self.chains,
             large_step: self.large_step,
+            allocation: self.allocation,
             replicas: self.replicas,
             swap: self.swap,
             ladder: self.ladder.clone(),

@@ -18,11 +18,20 @@ pub struct MmltIntegrator {
     pub chains: usize,
     pub sigma: f32,
     pub large_step_probability: f32,
+    /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
+    pub spread_allocation: bool,
 }
 
 impl MmltIntegrator {
     pub fn new(max_depth: u32) -> Self {
-        Self { max_depth, bootstrap: 20_000, chains: 64, sigma: 0.01, large_step_probability: 0.3 }
+        Self {
+            max_depth,
+            bootstrap: 20_000,
+            chains: 64,
+            sigma: 0.01,
+            large_step_probability: 0.3,
+            spread_allocation: false,
+        }
     }
 }
 
@@ -59,7 +68,8 @@ impl Integrator for MmltIntegrator {
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
         let depths = self.max_depth as usize + 1;
-        let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
+        let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
+            .with_spread_allocation(self.spread_allocation);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.group.k;

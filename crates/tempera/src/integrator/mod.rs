@@ -20,7 +20,7 @@ pub use mmlt::MmltIntegrator;
 pub use path::PathIntegrator;
 pub use pssmlt::PssmltIntegrator;
 pub use run_stats::RunStats;
-pub use settings::{IntegratorKind, IntegratorSettings, LadderTuning, Swap, TemperedMis, create};
+pub use settings::{Allocation, IntegratorKind, IntegratorSettings, LadderTuning, Swap, TemperedMis, create};
 pub use tempered::TemperedIntegrator;
 
 use crate::scene::Scene;

@@ -83,6 +83,10 @@ pub struct DepthRecord {
     pub b_rel_se: f64,
     pub bootstrap_samples: u64,
     pub large_step_samples: u64,
+    /// How unevenly the depth's light is spread over its paths: `sqrt(E[f²]/E[f]²)` over the
+    /// bootstrap's non-zero values, capped at 8 (mutations may be allotted by `b` times it).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub spread: f64,
     pub mutations: u64,
     pub acceptance: Acceptance,
     pub invalid: u64,
@@ -171,6 +175,7 @@ impl DepthRecord {
             b_rel_se: d.b_rel_se,
             bootstrap_samples: d.bootstrap_samples,
             large_step_samples: d.large_step_samples,
+            spread: d.spread,
             mutations: d.mutations,
             acceptance: Acceptance {
                 total: d.acceptance(),

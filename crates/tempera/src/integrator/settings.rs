@@ -79,6 +79,18 @@ pub enum TemperedMis {
     Roughened,
 }
 
+/// How MMLT and tempered MMLT allot mutations to path depths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Allocation {
+    /// In proportion to each depth's normalisation `b_k` (Hachisuka et al. 2014).
+    #[default]
+    Normalisation,
+    /// In proportion to `b_k` times the spread of the depth's non-zero bootstrap values.
+    Spread,
+}
+
 /// How tempered MMLT tunes each depth's ladder (without a fixed ladder).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
@@ -117,6 +129,9 @@ pub struct IntegratorSettings {
     /// Markov-chain integrators: the probability of a large step.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub large_step: Option<f32>,
+    /// MMLT and tempered MMLT: how mutations are allotted to path depths.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub allocation: Option<Allocation>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
@@ -192,6 +207,7 @@ impl IntegratorSettings {
             ("bootstrap", self.bootstrap.is_some(), chain),
             ("chains", self.chains.is_some(), chain),
             ("large_step", self.large_step.is_some(), chain),
+            ("allocation", self.allocation.is_some(), kind == Mmlt || tempered),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
@@ -296,6 +312,7 @@ pub fn create(
                 bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
                 chains: s.chains.unwrap_or(m.chains),
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
+                spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
                 ..m
             })
         }
@@ -314,6 +331,7 @@ pub fn create(
                 bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
                 chains: s.chains.unwrap_or(m.chains),
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
+                spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
                 replicas: s.replica_count().unwrap_or(m.replicas),
                 swap: s.swap.unwrap_or(m.swap),
                 ladder: s.ladder.clone().unwrap_or_default(),

@@ -403,6 +403,39 @@ fn mmlt_time_budget_advances_every_depth() {
     assert!((mean(&out.image) / mean(&bdpt.image) - 1.0).abs() < 0.05, "{} vs {}", mean(&out.image), mean(&bdpt.image));
 }
 
+/// Allotting by `b_k` times spread gives each depth about that share of a fixed budget,
+/// reports each depth's spread, and leaves the image unbiased (BDPT agrees).
+#[test]
+fn mmlt_spread_allocation_follows_b_times_spread_and_agrees_with_bdpt() {
+    let scene = crate::scenes::default_scene().build().unwrap();
+    let mut scene = scene;
+    scene.set_resolution(24, 24);
+    let m = MmltIntegrator { bootstrap: 50_000, chains: 16, spread_allocation: true, ..MmltIntegrator::new(5) };
+    let out = render_with(&scene, &m, Budget::Samples(1024), 3, 0);
+    let weight = |d: &crate::mcmc::DepthStats| d.b * d.spread;
+    let total_weight: f64 = out.chains.iter().map(weight).sum();
+    let total: u64 = out.chains.iter().map(|d| d.mutations).sum();
+    assert!(out.chains.iter().all(|d| (1.0..=8.0).contains(&d.spread)), "{:?}", out.chains);
+    assert!(out.chains.iter().any(|d| d.spread > 1.5), "no depth with spread light");
+    for d in &out.chains {
+        let share = d.mutations as f64 / total as f64;
+        // The plan used the bootstrap's b; the reported b is refined by the large steps.
+        let expected = weight(d) / total_weight;
+        assert!((share - expected).abs() < 0.02, "depth {}: share {share} vs {expected}", d.depth);
+    }
+    // By b alone the shares are far from those.
+    let plain = render_with(&scene, &MmltIntegrator { spread_allocation: false, ..m }, Budget::Samples(1024), 3, 0);
+    let plain_total: u64 = plain.chains.iter().map(|d| d.mutations).sum();
+    assert!(
+        plain.chains.iter().any(|d| (d.mutations as f64 / plain_total as f64 - weight(d) / total_weight).abs() > 0.05),
+        "allotting by b alone gives the same shares"
+    );
+    let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(512), 1, 0);
+    let mean =
+        |img: &crate::texture::Image| img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64;
+    assert!((mean(&out.image) / mean(&bdpt.image) - 1.0).abs() < 0.03, "{} vs {}", mean(&out.image), mean(&bdpt.image));
+}
+
 fn pssmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> RenderOutput {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});

@@ -121,6 +121,23 @@ impl Bootstrap {
         (mean, var.sqrt() / mean)
     }
 
+    /// How unevenly the group's light is spread over the paths that carry it:
+    /// `sqrt(E[f²] / E[f]²)` over the bootstrap's non-zero values, from 1 (all equal) up to a
+    /// cap of 8. Zeros are left out: a target that is zero on most of primary sample space (a
+    /// small light seen directly) is easy for a chain once found.
+    pub fn spread(&self) -> f64 {
+        let (mut n, mut sum, mut sum2) = (0u64, 0.0f64, 0.0f64);
+        for &v in self.values.iter().filter(|&&v| v > 0.0) {
+            n += 1;
+            sum += f64::from(v);
+            sum2 += f64::from(v).powi(2);
+        }
+        if n == 0 || sum <= 0.0 {
+            return 1.0;
+        }
+        (sum2 * n as f64 / (sum * sum)).sqrt().clamp(1.0, 8.0)
+    }
+
     /// The moments of the values, to be refined with the large steps'.
     pub fn moments(&self) -> Moments {
         let n = self.values.len() as u64;

@@ -1,7 +1,8 @@
 //! The chain driver shared by every Markov-chain integrator (MMLT, PSSMLT, tempered MMLT):
 //! groups of walkers (MMLT and tempering: one group per path depth; PSSMLT: one group), each
 //! group bootstrapped ([`super::bootstrap`]) for its normalisation `b` and its start states.
-//! Mutations are allotted to groups in proportion to `b` (Hachisuka et al. 2014 §5); a fixed
+//! Mutations are allotted to groups in proportion to `b` (Hachisuka et al. 2014 §5), or to `b`
+//! times the spread of the group's bootstrap values ([`Bootstrap::spread`]); a fixed
 //! budget runs in one round, a time budget in rounds of about one mutation per pixel until the
 //! deadline. Walkers are the unit of parallel work and splat into fixed-point buffers shared
 //! by the threads, so the image is bit-identical at any thread count.
@@ -35,6 +36,10 @@ pub struct ChainSettings {
     pub chains: usize,
     pub sigma: f32,
     pub large_step_probability: f32,
+    /// Allot mutations in proportion to `b` times the spread of each group's values
+    /// ([`Bootstrap::spread`]) instead of `b` alone: a group whose light is carried by a few
+    /// rare paths (a caustic) mixes slowly and gets more.
+    pub spread_allocation: bool,
 }
 
 /// How a group's splat layers are normalised, decided when the group is prepared.
@@ -193,7 +198,12 @@ struct Group<L> {
 
 impl ChainSettings {
     pub fn new(bootstrap: usize, chains: usize, sigma: f32, large_step_probability: f32) -> Self {
-        Self { bootstrap, chains, sigma, large_step_probability }
+        Self { bootstrap, chains, sigma, large_step_probability, spread_allocation: false }
+    }
+
+    /// These settings with mutations allotted by `b` times spread when `spread` is set.
+    pub fn with_spread_allocation(self, spread: bool) -> Self {
+        Self { spread_allocation: spread, ..self }
     }
 
     /// Renders with `groups` independent sets of walkers (MMLT: one per path depth; PSSMLT:
@@ -239,17 +249,24 @@ impl ChainSettings {
         Ok((boots, rays))
     }
 
+    /// A group's weight in the allotment of mutations: its normalisation `b` (Hachisuka et al.
+    /// 2014), times the spread of its values with [`Self::spread_allocation`].
+    fn weight(&self, boot: &Bootstrap) -> f64 {
+        let b = boot.b();
+        if self.spread_allocation { b * boot.spread() } else { b }
+    }
+
     /// The walkers of every group with light: under a fixed budget each group's share of the
-    /// mutations in proportion to its `b`, and no more walkers than mutations.
+    /// mutations in proportion to its weight, and no more walkers than mutations.
     /// A group whose bootstrap holds no light has no state to start from: it gets no walkers.
     fn plan(&self, boots: &[Bootstrap], budget: Option<u64>) -> Vec<Slot> {
-        let b_total: f64 = boots.iter().map(Bootstrap::b).sum();
+        let total: f64 = boots.iter().map(|b| self.weight(b)).sum();
         let mut plan = Vec::new();
         for (k, b) in boots.iter().enumerate() {
             if b.mean <= 0.0 || b.b() <= 0.0 {
                 continue;
             }
-            let m_k = budget.map(|m| (b.b() / b_total * m as f64).round() as u64);
+            let m_k = budget.map(|m| (self.weight(b) / total * m as f64).round() as u64);
             if m_k == Some(0) {
                 continue;
             }
@@ -278,8 +295,8 @@ impl ChainSettings {
         let (w, h) = (scene.film.width, scene.film.height);
         let pixels = u64::from(w) * u64::from(h);
         let (boots, mut total_rays) = self.bootstrap(seed, groups, targets)?;
-        let b_total: f64 = boots.iter().map(Bootstrap::b).sum();
-        let share = |k: usize| boots[k].b() / b_total;
+        let total: f64 = boots.iter().map(|b| self.weight(b)).sum();
+        let share = |k: usize| self.weight(&boots[k]) / total;
         let budget = match settings.budget {
             Budget::Samples(mpp) => Some(u64::from(mpp) * pixels),
             Budget::Time(_) => None,
@@ -410,6 +427,7 @@ fn develop<W: Walker>(
         };
         (d.b, d.b_rel_se) = boot.normalisation(&large[k][0]);
         d.bootstrap_samples = boot.values.len() as u64;
+        d.spread = boot.spread();
         d.large_step_samples = large[k][0].n;
         d.invalid += boot.invalid;
         let Some(group) = &groups[k] else {

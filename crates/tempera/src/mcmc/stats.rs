@@ -11,6 +11,8 @@ pub struct DepthStats {
     pub b_rel_se: f64,
     pub bootstrap_samples: u64,
     pub large_step_samples: u64,
+    /// The spread of the bootstrap's non-zero values (see `Bootstrap::spread`).
+    pub spread: f64,
     pub mutations: u64,
     pub large_steps_proposed: u64,
     pub large_steps_accepted: u64,

@@ -22,6 +22,8 @@ pub struct TemperedIntegrator {
     pub chains: usize,
     pub sigma: f32,
     pub large_step_probability: f32,
+    /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
+    pub spread_allocation: bool,
     /// Replicas per ensemble (1: plain MMLT).
     pub replicas: usize,
     pub swap: Swap,
@@ -59,6 +61,7 @@ impl TemperedIntegrator {
             chains: 64,
             sigma: 0.01,
             large_step_probability: 0.3,
+            spread_allocation: false,
             // Two replicas measured better than five at equal time on every scene tried (see
             // the README); the paper's five are `paper()`.
             replicas: 2,
@@ -166,7 +169,8 @@ impl Integrator for TemperedIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
-        let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
+        let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
+            .with_spread_allocation(self.spread_allocation);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::new(scene, depth, self.tempering(), 0.0);
         let depths = self.max_depth as usize + 1;
