@@ -235,6 +235,7 @@ impl IntegratorSettings {
                 ("replicas", self.replicas.is_some()),
                 ("ladder", self.ladder.is_some()),
                 ("reuse_replicas", self.reuse_replicas.is_some()),
+                ("allocation", self.allocation.is_some()),
                 ("max_temperature", self.max_temperature.is_some()),
                 ("collapse_above", self.collapse_above.is_some()),
                 ("swap_target", self.swap_target.is_some()),

@@ -222,11 +222,20 @@ mod integrator {
         scene.set_resolution(16, 16);
         let cancel = AtomicBool::new(false);
         let control = RenderControl::new(&cancel, &|_| {});
-        let mmlt = MmltIntegrator { bootstrap: 5_000, chains: 8, ..MmltIntegrator::new(5) };
-        let tempered = TemperedIntegrator { bootstrap: 5_000, chains: 8, replicas: 1, ..TemperedIntegrator::new(5) };
-        let a = mmlt.render(&scene, &settings(16, 3, 0), &control).unwrap();
-        let b = tempered.render(&scene, &settings(16, 3, 0), &control).unwrap();
-        assert!(a.image.pixels == b.image.pixels, "replicas = 1 is MMLT bit for bit");
+        // With the same allotment of mutations to depths (tempered MMLT's default is by spread).
+        for spread_allocation in [false, true] {
+            let mmlt = MmltIntegrator { bootstrap: 5_000, chains: 8, spread_allocation, ..MmltIntegrator::new(5) };
+            let tempered = TemperedIntegrator {
+                bootstrap: 5_000,
+                chains: 8,
+                replicas: 1,
+                spread_allocation,
+                ..TemperedIntegrator::new(5)
+            };
+            let a = mmlt.render(&scene, &settings(16, 3, 0), &control).unwrap();
+            let b = tempered.render(&scene, &settings(16, 3, 0), &control).unwrap();
+            assert!(a.image.pixels == b.image.pixels, "replicas = 1 is MMLT bit for bit");
+        }
     }
 
     /// On a diffuse Cornell box every replica's target equals the main one, so almost every
