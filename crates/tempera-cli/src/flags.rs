@@ -27,7 +27,8 @@ pub struct IntegratorFlags {
     #[arg(long)]
     pub large_step: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths: in proportion to their
-    /// normalisation b_k (default), or to b_k times the spread of their light over their paths.
+    /// normalisation b_k (MMLT's default), or to b_k times the spread of their light over their
+    /// paths (tempered MMLT's default).
     #[arg(long, value_enum)]
     pub allocation: Option<Allocation>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).

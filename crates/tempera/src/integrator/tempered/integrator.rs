@@ -61,7 +61,7 @@ impl TemperedIntegrator {
             chains: 64,
             sigma: 0.01,
             large_step_probability: 0.3,
-            // Measured better than by b_k alone at 7 of 8 scene × budget pairs (see the README).
+            // Measured better than by b_k alone at 6 of 8 scene × budget pairs (see the README).
             spread_allocation: true,
             // Two replicas measured better than five at equal time on every scene tried (see
             // the README); the paper's five are `paper()`.
