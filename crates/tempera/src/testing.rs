@@ -157,3 +157,33 @@ pub fn chi2_directions(
     let p_value = if outside > 0 { 0.0 } else { chi2_p_value(&counts, &expected) };
     Chi2Result { p_value, pdf_integral: total, sampled_fraction: produced as f64 / n as f64 }
 }
+
+/// The moments of MMLT's depth-`k` target over `n` independent primary-sample-space samples
+/// (the bootstrap's samplers, seeded by `seed`): the plain estimate of `b_k` that lower-variance
+/// normalisers are held to.
+pub fn mmlt_target_moments(scene: &crate::scene::Scene, k: usize, seed: u64, n: usize) -> crate::mcmc::Moments {
+    use crate::mcmc::{ChainSettings, EvalContext, Moments, evaluate, sampler_for};
+    use rayon::prelude::*;
+    let settings = ChainSettings::new(0, 0, 0.01, 0.3);
+    let values: Vec<f64> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut cx = EvalContext::new(sampler_for(seed, k, i, &settings));
+            f64::from(evaluate(scene, k, &mut cx).f)
+        })
+        .collect();
+    let mut moments = Moments::default();
+    for v in values {
+        moments.push(v);
+    }
+    moments
+}
+
+/// Asserts that two independent estimates of one mean agree within four combined standard
+/// errors; returns their relative standard errors.
+pub fn assert_same_mean(name: &str, a: &crate::mcmc::Moments, b: &crate::mcmc::Moments) -> (f64, f64) {
+    let ((ma, ea), (mb, eb)) = (a.mean_and_rel_se(), b.mean_and_rel_se());
+    let sigma = ((ma * ea).powi(2) + (mb * eb).powi(2)).sqrt();
+    assert!((ma - mb).abs() < 4.0 * sigma, "{name}: {ma} ± {ea} vs {mb} ± {eb}");
+    (ea, eb)
+}

@@ -77,14 +77,13 @@ fn sample(scene: &Scene, k: usize, sampler: &mut IndependentSampler, paths: &mut
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mcmc::{ChainSettings, EvalContext, evaluate, sampler_for};
+    use crate::testing::{assert_same_mean, mmlt_target_moments};
 
     /// At every depth of two scenes, the all-strategy estimate of `b_k` agrees with the mean of
     /// MMLT's own target over independent samples (within four combined standard errors) and
     /// has a smaller relative error at the same number of samples.
     #[test]
     fn all_strategies_estimate_the_depth_normalisation_with_less_error() {
-        let settings = ChainSettings::new(0, 0, 0.01, 0.3);
         for (name, scene) in [
             ("default", crate::scenes::default_scene().build().unwrap()),
             ("cornell", crate::scenes::cornell_box(16, 16).build().unwrap()),
@@ -93,21 +92,9 @@ mod tests {
             scene.set_resolution(16, 16);
             for k in 1..=4 {
                 let n = 200_000;
-                let plain: Vec<f64> = (0..n)
-                    .into_par_iter()
-                    .map(|i| {
-                        let mut cx = EvalContext::new(sampler_for(9, k, i, &settings));
-                        f64::from(evaluate(&scene, k, &mut cx).f)
-                    })
-                    .collect();
-                let mut one = Moments::default();
-                for v in plain {
-                    one.push(v);
-                }
+                let one = mmlt_target_moments(&scene, k, 9, n);
                 let (all, _) = all_strategies(&scene, k, 9, n);
-                let ((a, ea), (b, eb)) = (one.mean_and_rel_se(), all.mean_and_rel_se());
-                let sigma = ((a * ea).powi(2) + (b * eb).powi(2)).sqrt();
-                assert!((a - b).abs() < 4.0 * sigma, "{name} depth {k}: one strategy {a} ± {ea}, all {b} ± {eb}");
+                let (ea, eb) = assert_same_mean(&format!("{name} depth {k}"), &one, &all);
                 assert!(eb < 0.8 * ea && eb > 0.0, "{name} depth {k}: relative errors {eb} (all) vs {ea} (one)");
             }
         }

@@ -65,7 +65,7 @@ fn sample(scene: &Scene, rng: &mut Pcg32) -> Option<(f32, u64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mcmc::{ChainSettings, EvalContext, evaluate, sampler_for};
+    use crate::testing::{assert_same_mean, mmlt_target_moments};
 
     /// The emitter-to-camera estimate of `b_0` has the camera rays' expectation (their
     /// difference within four combined standard errors) and a far smaller relative error at the
@@ -73,7 +73,6 @@ mod tests {
     /// (the Cornell box).
     #[test]
     fn emitter_samples_estimate_the_depth_zero_normalisation_with_less_error() {
-        let settings = ChainSettings::new(0, 0, 0.01, 0.3);
         for (name, scene) in [
             ("default", crate::scenes::default_scene().build().unwrap()),
             ("cornell", crate::scenes::cornell_box(16, 16).build().unwrap()),
@@ -81,21 +80,9 @@ mod tests {
             let mut scene = scene;
             scene.set_resolution(16, 16);
             let n = 1_000_000;
-            let camera: Vec<f64> = (0..n)
-                .into_par_iter()
-                .map(|i| {
-                    let mut cx = EvalContext::new(sampler_for(5, 0, i, &settings));
-                    f64::from(evaluate(&scene, 0, &mut cx).f)
-                })
-                .collect();
-            let mut rays = Moments::default();
-            for v in camera {
-                rays.push(v);
-            }
+            let rays = mmlt_target_moments(&scene, 0, 5, n);
             let (emitters, _) = direct_emission(&scene, 5, n).expect("no environment light");
-            let ((a, ea), (b, eb)) = (rays.mean_and_rel_se(), emitters.mean_and_rel_se());
-            let sigma = ((a * ea).powi(2) + (b * eb).powi(2)).sqrt();
-            assert!((a - b).abs() < 4.0 * sigma, "{name}: camera rays {a} ± {ea}, emitters {b} ± {eb}");
+            let (ea, eb) = assert_same_mean(name, &rays, &emitters);
             assert!(eb < 0.2 * ea && ea > 0.0, "{name}: relative errors {eb} (emitters) vs {ea} (camera rays)");
         }
     }
