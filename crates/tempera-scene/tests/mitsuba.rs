@@ -71,7 +71,7 @@ fn full_fixture_loads_every_feature() {
     let count = |f: &dyn Fn(&Material) -> bool| scene.materials.iter().filter(|m| f(m)).count();
     assert_eq!(count(&|m| matches!(m, Material::Conductor(_))), 1, "gold is shared by the sphere and the OBJ");
     assert_eq!(count(&|m| matches!(m, Material::Dielectric(d) if (d.eta - 1.5046).abs() < 1e-4)), 1);
-    assert_eq!(count(&|m| matches!(m, Material::CoatedDiffuse(_))), 1);
+    assert_eq!(count(&|m| matches!(m, Material::Plastic(_))), 1);
 }
 
 #[test]

@@ -10,7 +10,7 @@ use crate::LoadError;
 use roxmltree::Node;
 use std::sync::Arc;
 use tempera::material::{
-    CoatedDiffuseMaterial, ConductorFresnel, ConductorMaterial, DielectricMaterial, Material, MixMaterial, Roughness,
+    ConductorFresnel, ConductorMaterial, DielectricMaterial, Material, MixMaterial, PlasticMaterial, Roughness,
 };
 use tempera::math::Rgb;
 use tempera::scene::MaterialId;
@@ -164,7 +164,8 @@ impl Loader {
                 Material::DiffuseTransmission(_) => "diffuse transmission",
                 Material::Conductor(_) => "conductor",
                 Material::Dielectric(_) => "dielectric",
-                Material::CoatedDiffuse(_) => "plastic",
+                Material::Plastic(_) => "plastic",
+                Material::Layered(_) => "layered",
                 Material::Mix(_) => "blend",
             };
             if !matches!(ty.as_str(), "twosided" | "bumpmap" | "mask") {
@@ -291,9 +292,9 @@ impl Loader {
                 let specular = props.color(ctx, "specularReflectance", false)?.unwrap_or(Rgb::ONE);
                 let nonlinear = props.bool(ctx, "nonlinear", false)?;
                 let roughness = self.roughness(ctx, props, ty, rough)?;
-                let mut m = CoatedDiffuseMaterial::new(diffuse, roughness, eta, nonlinear);
+                let mut m = PlasticMaterial::new(diffuse, roughness, eta, nonlinear);
                 m.specular = tempera::math::luminance(specular);
-                BsdfDesc::new(Material::CoatedDiffuse(m), true)
+                BsdfDesc::new(Material::Plastic(m), true)
             }
             "twosided" => {
                 let mut inner = self.inner_bsdf(ctx, props, ty)?;

@@ -1,8 +1,8 @@
 //! pbrt-v4 materials translated into core materials. `diffuse`, `diffusetransmission`,
-//! `conductor`, `dielectric` and `mix` map exactly, and `displacement` bump-maps any of them.
-//! pbrt-v4's stochastic layered `coateddiffuse` is approximated by the analytic
-//! coated-diffuse (plastic) model with the same coat index and roughness, and `coatedconductor`
-//! by its base conductor; these and other approximations are reported once per material type.
+//! `conductor`, `dielectric`, `mix` and the layered `coateddiffuse` and `coatedconductor` (with
+//! every parameter pbrt-v4 reads for them) map exactly, and `displacement` bump-maps any of
+//! them. Approximations (`thindielectric`, unsupported types) are reported once per material
+//! type.
 
 use super::Loader;
 use super::params::ParamSet;
@@ -11,8 +11,8 @@ use super::textures::SpectrumUse;
 use crate::LoadError;
 use crate::diagnostics::Loc;
 use tempera::material::{
-    CoatedDiffuseMaterial, ConductorFresnel, ConductorMaterial, DielectricMaterial, DiffuseTransmissionMaterial,
-    Material, MixMaterial, Roughness,
+    ConductorFresnel, ConductorMaterial, DielectricMaterial, DiffuseTransmissionMaterial, LayeredBaseMaterial,
+    LayeredMaterial, Material, MixMaterial, Roughness,
 };
 use tempera::math::Rgb;
 use tempera::texture::Texture;
@@ -82,15 +82,62 @@ impl Loader {
         self.warn_once(&format!("material-{ty}"), Some(at), format!("material \"{ty}\" is approximated: {how}"))
     }
 
-    /// pbrt-v4's `coateddiffuse`, approximated analytically.
+    /// The coat and slab of pbrt-v4's `coateddiffuse` and `coatedconductor` over `base`;
+    /// `prefix` names the coat's roughness and index (`interface.` for `coatedconductor`).
+    fn layered(
+        &mut self,
+        params: &ParamSet,
+        at: &Loc,
+        base: LayeredBaseMaterial,
+        prefix: &str,
+        eta: f32,
+    ) -> Result<Material, LoadError> {
+        let syntax = |message: String| LoadError::Syntax { loc: at.clone(), message };
+        let max_depth = params.int("maxdepth", 10)?;
+        let samples = params.int("nsamples", 1)?;
+        if !(1..=10_000).contains(&max_depth) {
+            return Err(syntax(format!("\"maxdepth\" must be between 1 and 10000, got {max_depth}")));
+        }
+        if !(1..=1_000).contains(&samples) {
+            return Err(syntax(format!("\"nsamples\" must be between 1 and 1000, got {samples}")));
+        }
+        let albedo = self.spectrum_param(params, "albedo", Some(Rgb::ZERO), SpectrumUse::Unitless)?.expect("default");
+        Ok(Material::Layered(LayeredMaterial {
+            base,
+            roughness: self.roughness(params, prefix)?,
+            eta,
+            thickness: self.float_param(params, "thickness", 0.01)?,
+            albedo,
+            g: self.float_param(params, "g", 0.0)?,
+            max_depth: max_depth as u32,
+            samples: samples as u32,
+        }))
+    }
+
+    /// pbrt-v4's `coateddiffuse`: a dielectric coat over a Lambertian base.
     fn coated_diffuse(&mut self, params: &ParamSet, at: &Loc) -> Result<Material, LoadError> {
-        self.approximated("coateddiffuse", at, "analytic coated diffuse (GGX dielectric coat over Lambertian, no coat absorption or interreflection sampling)")?;
-        let layer = ["thickness", "albedo", "g", "maxdepth", "nsamples"];
-        self.ignore(params, &layer, "the analytic coated diffuse has no medium between its layers");
         let reflectance =
             self.spectrum_param(params, "reflectance", Some(Rgb::splat(0.5)), SpectrumUse::Unitless)?.expect("default");
         let eta = self.eta(params, "eta", 1.5, at)?;
-        Ok(Material::CoatedDiffuse(CoatedDiffuseMaterial::new(reflectance, self.roughness(params, "")?, eta, false)))
+        self.layered(params, at, LayeredBaseMaterial::Diffuse(reflectance), "", eta)
+    }
+
+    /// pbrt-v4's `coatedconductor`: a dielectric coat over a conductor given by `reflectance`
+    /// or by `conductor.eta` and `conductor.k` (copper by default).
+    fn coated_conductor(&mut self, params: &ParamSet, at: &Loc) -> Result<Material, LoadError> {
+        let eta = self.eta(params, "interface.eta", 1.5, at)?;
+        let mut conductor = self.conductor(params, "conductor.")?;
+        if let Some(r) = self.spectrum_param(params, "reflectance", None, SpectrumUse::Unitless)? {
+            if params.find("conductor.eta").is_some() || params.find("conductor.k").is_some() {
+                return Err(LoadError::Syntax {
+                    loc: at.clone(),
+                    message: "coatedconductor takes \"reflectance\" or \"conductor.eta\"/\"conductor.k\", not both"
+                        .into(),
+                });
+            }
+            conductor.fresnel = ConductorFresnel::Reflectance(r);
+        }
+        self.layered(params, at, LayeredBaseMaterial::Conductor(conductor), "interface.", eta)
     }
 
     /// pbrt-v4's `mix` of two named materials.
@@ -138,22 +185,7 @@ impl Loader {
                 Material::Dielectric(DielectricMaterial { eta, roughness: self.roughness(params, "")? })
             }
             "coateddiffuse" => self.coated_diffuse(params, at)?,
-            "coatedconductor" => {
-                self.approximated(ty, at, "its base conductor without the dielectric coat")?;
-                let coat = [
-                    "interface.roughness",
-                    "interface.uroughness",
-                    "interface.vroughness",
-                    "interface.eta",
-                    "thickness",
-                    "albedo",
-                    "g",
-                    "maxdepth",
-                    "nsamples",
-                ];
-                self.ignore(params, &coat, "the coat of an approximated coatedconductor");
-                Material::Conductor(self.conductor(params, "conductor.")?)
-            }
+            "coatedconductor" => self.coated_conductor(params, at)?,
             "diffusetransmission" => {
                 let unitless = SpectrumUse::Unitless;
                 Material::DiffuseTransmission(DiffuseTransmissionMaterial {

@@ -66,7 +66,7 @@ fn random_walk<S: Sampler>(
             beta *= shading_normal_correction(it.wo, bs.wi, s.ng, bsdf.frame.n);
         }
         let mut pdf_rev = bsdf.pdf(bs.wi, it.wo);
-        pdf_fwd = bs.pdf;
+        pdf_fwd = if bs.proportional { bsdf.pdf(it.wo, bs.wi) } else { bs.pdf };
         let n = path.len();
         if bs.delta {
             path[n - 1].delta = true;

@@ -65,6 +65,7 @@ impl Conductor {
                 pdf: 1.0,
                 delta: true,
                 transmission: false,
+                proportional: false,
             });
         }
         let wm = self.distribution.sample_wm(wo, u);
@@ -73,6 +74,6 @@ impl Conductor {
             return None;
         }
         let pdf = self.distribution.pdf(wo, wm) / (4.0 * wo.dot(wm).abs());
-        Some(BsdfSample { f: self.microfacet(wo, wi), wi, pdf, delta: false, transmission: false })
+        Some(BsdfSample { f: self.microfacet(wo, wi), wi, pdf, delta: false, transmission: false, proportional: false })
     }
 }

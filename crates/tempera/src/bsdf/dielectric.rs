@@ -136,7 +136,7 @@ impl Dielectric {
             let d = &self.distribution;
             let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr / (pr + pt);
             let f = d.d(wm) * d.g(wo, wi) * r / (4.0 * wi.z * wo.z).abs();
-            Some(BsdfSample { f: Rgb::splat(f), wi, pdf, delta: false, transmission: false })
+            Some(BsdfSample { f: Rgb::splat(f), wi, pdf, delta: false, transmission: false, proportional: false })
         } else {
             let (wi, etap) = fresnel::refract(wo, wm, self.eta)?;
             if same_hemisphere(wo, wi) || wi.z == 0.0 {
@@ -150,7 +150,7 @@ impl Dielectric {
             if mode == TransportMode::Radiance {
                 ft /= etap * etap;
             }
-            Some(BsdfSample { f: Rgb::splat(ft), wi, pdf, delta: false, transmission: true })
+            Some(BsdfSample { f: Rgb::splat(ft), wi, pdf, delta: false, transmission: true, proportional: false })
         }
     }
 
@@ -169,6 +169,7 @@ impl Dielectric {
                 pdf: pr / (pr + pt),
                 delta: true,
                 transmission: false,
+                proportional: false,
             });
         }
         let (wi, etap) = fresnel::refract(wo, Vec3::Z, self.eta)?;
@@ -176,6 +177,13 @@ impl Dielectric {
         if mode == TransportMode::Radiance {
             ft /= etap * etap;
         }
-        Some(BsdfSample { f: Rgb::splat(ft), wi, pdf: pt / (pr + pt), delta: true, transmission: true })
+        Some(BsdfSample {
+            f: Rgb::splat(ft),
+            wi,
+            pdf: pt / (pr + pt),
+            delta: true,
+            transmission: true,
+            proportional: false,
+        })
     }
 }

@@ -33,6 +33,7 @@ impl Diffuse {
             pdf: cosine_hemisphere_pdf(wi.z.abs()),
             delta: false,
             transmission: false,
+            proportional: false,
         })
     }
 }

@@ -47,6 +47,7 @@ impl DiffuseTransmission {
             pdf: p * cosine_hemisphere_pdf(wi.z.abs()),
             delta: false,
             transmission: !reflect,
+            proportional: false,
         })
     }
 }

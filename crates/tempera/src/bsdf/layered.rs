@@ -26,8 +26,6 @@
 //! At the depth limit the two differ by the truncated paths: a value connects to the exit from
 //! the last event of its walk, which a sample would leave by one step more.
 //!
-//! This module holds the BSDF alone; the materials that build it from scene files come next.
-//!
 //! Their random numbers come from a generator seeded by a hash of the directions (and, for
 //! samples, of the sample's own numbers), so every estimate is a pure function of its inputs:
 //! a Markov chain re-evaluating a state gets the same value. The BSDF is two-sided, as pbrt-v4
@@ -322,7 +320,8 @@ impl Layered {
         };
         let bs = self.top.sample(wo, uc, u, mode)?;
         if !bs.transmission {
-            return Some(out(bs));
+            // The coat's own reflection: its density is the coat's alone, not the BSDF's.
+            return Some(out(BsdfSample { proportional: !bs.delta, ..bs }));
         }
         let mut rng = rng_for(wo, Vec3::new(uc, u.x, u.y), 2);
         let mut w = bs.wi;
@@ -379,7 +378,7 @@ impl Layered {
             w = bs.wi;
             if bs.transmission {
                 // Out through the top.
-                let s = BsdfSample { f, wi: w, pdf, delta, transmission: false };
+                let s = BsdfSample { f, wi: w, pdf, delta, transmission: false, proportional: !delta };
                 return (s.f.is_finite() && s.pdf.is_finite()).then(|| out(s));
             }
             f *= bs.wi.z.abs();

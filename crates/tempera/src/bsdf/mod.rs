@@ -18,6 +18,7 @@ pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
 pub use diffuse_transmission::DiffuseTransmission;
+pub use layered::{Base as LayeredBase, Layered};
 pub use microfacet::Ggx;
 pub use plastic::Plastic;
 
@@ -41,6 +42,10 @@ pub struct BsdfSample {
     pub pdf: f32,
     pub delta: bool,
     pub transmission: bool,
+    /// `pdf` is only proportional to the density of the sampling procedure (a layered BSDF's
+    /// random walk): `f·cos/pdf` is the sample's exact weight, but multiple importance
+    /// sampling must use [`Bsdf::pdf`] for the density of `wi`.
+    pub proportional: bool,
 }
 
 #[inline]
@@ -56,6 +61,7 @@ pub enum Bsdf {
     Conductor(Conductor),
     Dielectric(Dielectric),
     Plastic(Plastic),
+    Layered(Layered),
 }
 
 impl Bsdf {
@@ -68,6 +74,7 @@ impl Bsdf {
             Bsdf::Conductor(b) => b.eval(wo, wi),
             Bsdf::Dielectric(b) => b.eval(wo, wi, mode),
             Bsdf::Plastic(b) => b.eval(wo, wi),
+            Bsdf::Layered(b) => b.eval(wo, wi, mode),
         }
     }
 
@@ -80,6 +87,7 @@ impl Bsdf {
             Bsdf::Conductor(b) => b.pdf(wo, wi),
             Bsdf::Dielectric(b) => b.pdf(wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
+            Bsdf::Layered(b) => b.pdf(wo, wi),
         }
     }
 
@@ -92,6 +100,7 @@ impl Bsdf {
             Bsdf::Conductor(b) => b.sample(wo, u),
             Bsdf::Dielectric(b) => b.sample(wo, uc, u, mode),
             Bsdf::Plastic(b) => b.sample(wo, uc, u),
+            Bsdf::Layered(b) => b.sample(wo, uc, u, mode),
         }?;
         (s.pdf > 0.0 && s.f.is_finite() && s.wi.z != 0.0).then_some(s)
     }
@@ -106,6 +115,7 @@ impl Bsdf {
             Bsdf::Conductor(b) => b.distribution = b.distribution.roughened(a),
             Bsdf::Dielectric(b) => b.distribution = b.distribution.roughened(a),
             Bsdf::Plastic(b) => b.distribution = b.distribution.roughened(a),
+            Bsdf::Layered(b) => *b = b.roughened(a),
         }
         out
     }
@@ -117,6 +127,7 @@ impl Bsdf {
             Bsdf::Diffuse(_) | Bsdf::DiffuseTransmission(_) | Bsdf::Plastic(_) => false,
             Bsdf::Conductor(b) => b.distribution.effectively_smooth(),
             Bsdf::Dielectric(b) => b.is_delta(),
+            Bsdf::Layered(b) => b.is_delta(),
         }
     }
 }

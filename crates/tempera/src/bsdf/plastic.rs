@@ -109,7 +109,14 @@ impl Plastic {
             if smooth {
                 let wi = Vec3::new(-wo_up.x, -wo_up.y, wo_up.z);
                 let f = self.specular * fresnel::dielectric(wo_up.z, self.eta) / wi.z;
-                return Some(BsdfSample { f: Rgb::splat(f), wi: flip(wi), pdf: ps, delta: true, transmission: false });
+                return Some(BsdfSample {
+                    f: Rgb::splat(f),
+                    wi: flip(wi),
+                    pdf: ps,
+                    delta: true,
+                    transmission: false,
+                    proportional: false,
+                });
             }
             let wm = self.distribution.sample_wm(wo_up, u);
             crate::math::reflect(wo_up, wm)
@@ -120,6 +127,13 @@ impl Plastic {
             return None;
         }
         let wi = flip(wi_up);
-        Some(BsdfSample { f: self.eval(wo, wi), wi, pdf: self.pdf(wo, wi), delta: false, transmission: false })
+        Some(BsdfSample {
+            f: self.eval(wo, wi),
+            wi,
+            pdf: self.pdf(wo, wi),
+            delta: false,
+            transmission: false,
+            proportional: false,
+        })
     }
 }

@@ -132,7 +132,8 @@ impl PixelEstimator for PathIntegrator {
             if !beta.is_finite() || beta.max_element() <= 0.0 {
                 break;
             }
-            prev = PrevVertex { p: it.surface.p, bsdf_pdf: bs.pdf, specular: bs.delta };
+            let bsdf_pdf = if bs.proportional { bsdf.pdf(it.wo, bs.wi) } else { bs.pdf };
+            prev = PrevVertex { p: it.surface.p, bsdf_pdf, specular: bs.delta };
             ray = spawn_ray(it.surface.p, it.surface.ng, bs.wi);
             if depth > RR_DEPTH {
                 let q = (1.0 - beta.max_element()).max(0.0);

@@ -1,7 +1,9 @@
 //! Materials: textured parameters that produce a [`Bsdf`] at a surface point (pbrt-v4 §10.5).
 
 use crate::bsdf::plastic::PlasticCoat;
-use crate::bsdf::{Bsdf, Conductor, Dielectric, Diffuse, DiffuseTransmission, Ggx, Plastic, fresnel};
+use crate::bsdf::{
+    Bsdf, Conductor, Dielectric, Diffuse, DiffuseTransmission, Ggx, Layered, LayeredBase, Plastic, fresnel,
+};
 use crate::math::Vec3;
 use crate::math::rng::{hash, mix64};
 use crate::math::{Rgb, Vec2};
@@ -58,23 +60,86 @@ pub struct ConductorMaterial {
     pub tint: Texture,
 }
 
+impl ConductorMaterial {
+    pub fn bsdf(&self, uv: Vec2) -> Conductor {
+        let (eta, k) = match &self.fresnel {
+            ConductorFresnel::Ior { eta, k } => (eta.eval(uv), k.eval(uv)),
+            ConductorFresnel::Reflectance(r) => fresnel::conductor_from_reflectance(r.eval(uv)),
+        };
+        Conductor { distribution: self.roughness.distribution(uv), eta, k, tint: self.tint.eval(uv).max(Rgb::ZERO) }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct DielectricMaterial {
     pub eta: f32,
     pub roughness: Roughness,
 }
 
+/// Mitsuba's analytic `plastic` and `roughplastic` (a GGX dielectric coat over a Lambertian
+/// base, Mitsuba's definition).
 #[derive(Clone, Debug)]
-pub struct CoatedDiffuseMaterial {
+pub struct PlasticMaterial {
     pub reflectance: Texture,
     pub roughness: Roughness,
     pub specular: f32,
     pub coat: PlasticCoat,
 }
 
-impl CoatedDiffuseMaterial {
+impl PlasticMaterial {
     pub fn new(reflectance: Texture, roughness: Roughness, eta: f32, nonlinear: bool) -> Self {
         Self { reflectance, roughness, specular: 1.0, coat: PlasticCoat::new(eta, nonlinear) }
+    }
+}
+
+/// What lies under a layered material's coat.
+#[derive(Clone, Debug)]
+pub enum LayeredBaseMaterial {
+    /// pbrt-v4's `coateddiffuse`: a Lambertian base of this reflectance.
+    Diffuse(Texture),
+    /// pbrt-v4's `coatedconductor`: a conductor, whose index of refraction is taken relative
+    /// to the coat's (pbrt-v4 divides `eta` and `k` by the interface's `eta`).
+    Conductor(ConductorMaterial),
+}
+
+/// pbrt-v4's `coateddiffuse` and `coatedconductor`: a dielectric coat of index `eta` over a
+/// base, with a slab of `thickness` between them holding a medium of single-scattering
+/// `albedo` and Henyey–Greenstein `g`, evaluated stochastically ([`Layered`]) with walks of at
+/// most `max_depth` events, `samples` of them per estimate.
+#[derive(Clone, Debug)]
+pub struct LayeredMaterial {
+    pub base: LayeredBaseMaterial,
+    pub roughness: Roughness,
+    pub eta: f32,
+    pub thickness: Texture,
+    pub albedo: Texture,
+    pub g: Texture,
+    pub max_depth: u32,
+    pub samples: u32,
+}
+
+impl LayeredMaterial {
+    fn bsdf(&self, uv: Vec2) -> Layered {
+        let base = match &self.base {
+            LayeredBaseMaterial::Diffuse(r) => {
+                LayeredBase::Diffuse(Diffuse { reflectance: r.eval(uv).clamp(Rgb::ZERO, Rgb::ONE) })
+            }
+            LayeredBaseMaterial::Conductor(m) => {
+                let mut c = m.bsdf(uv);
+                c.eta /= self.eta;
+                c.k /= self.eta;
+                LayeredBase::Conductor(c)
+            }
+        };
+        Layered {
+            top: Dielectric { distribution: self.roughness.distribution(uv), eta: self.eta },
+            base,
+            thickness: self.thickness.eval_float(uv).max(f32::MIN_POSITIVE),
+            albedo: self.albedo.eval(uv).clamp(Rgb::ZERO, Rgb::ONE),
+            g: self.g.eval_float(uv).clamp(-0.99, 0.99),
+            max_depth: self.max_depth,
+            samples: self.samples.max(1),
+        }
     }
 }
 
@@ -118,7 +183,8 @@ pub enum Material {
     DiffuseTransmission(DiffuseTransmissionMaterial),
     Conductor(ConductorMaterial),
     Dielectric(DielectricMaterial),
-    CoatedDiffuse(CoatedDiffuseMaterial),
+    Plastic(PlasticMaterial),
+    Layered(LayeredMaterial),
     /// Resolved by the scene, which knows the other materials (see `Scene::bsdf`).
     Mix(MixMaterial),
 }
@@ -140,22 +206,12 @@ impl Material {
             Material::Diffuse(m) => {
                 Bsdf::Diffuse(Diffuse { reflectance: m.reflectance.eval(uv).clamp(Rgb::ZERO, Rgb::ONE) })
             }
-            Material::Conductor(m) => {
-                let (eta, k) = match &m.fresnel {
-                    ConductorFresnel::Ior { eta, k } => (eta.eval(uv), k.eval(uv)),
-                    ConductorFresnel::Reflectance(r) => fresnel::conductor_from_reflectance(r.eval(uv)),
-                };
-                Bsdf::Conductor(Conductor {
-                    distribution: m.roughness.distribution(uv),
-                    eta,
-                    k,
-                    tint: m.tint.eval(uv).max(Rgb::ZERO),
-                })
-            }
+            Material::Conductor(m) => Bsdf::Conductor(m.bsdf(uv)),
             Material::Dielectric(m) => {
                 Bsdf::Dielectric(Dielectric { distribution: m.roughness.distribution(uv), eta: m.eta })
             }
-            Material::CoatedDiffuse(m) => {
+            Material::Layered(m) => Bsdf::Layered(m.bsdf(uv)),
+            Material::Plastic(m) => {
                 Bsdf::Plastic(Plastic::new(m.roughness.distribution(uv), &m.coat, m.reflectance.eval(uv), m.specular))
             }
         }
