@@ -484,4 +484,36 @@ mod tests {
             / n as f64;
         assert!(total > 0.8 && total < 1.5, "density integrates to {total}");
     }
+
+    /// A smooth clear coat over a Lambertian base of reflectance `R` has a closed form
+    /// (the coat's internal reflections summed as a geometric series):
+    /// `F(θo) + (1 − F(θo))·R·(1 − F̄i)/(1 − R·F̄i)`, with `F̄i` the cosine-weighted mean
+    /// internal Fresnel reflectance (total internal reflection included). Values and samples
+    /// both reach it; at `R = 1` any internal reflectance would conserve energy, so grey bases
+    /// are what test the walk's internal bounces.
+    #[test]
+    fn a_smooth_coat_over_a_grey_base_matches_the_closed_form() {
+        let n = 100_000;
+        let internal: f64 = (0..n)
+            .map(|i| {
+                let cos = (i as f32 + 0.5) / n as f32;
+                2.0 * f64::from(fresnel::dielectric(cos, 1.0 / 1.5) * cos) / n as f64
+            })
+            .sum();
+        for r in [0.38f32, 0.58] {
+            let b = Layered { thickness: 1e-6, max_depth: 100, ..coated_diffuse(r, 0.0, 0.0) };
+            for cos_o in [0.9f32, 0.5] {
+                let f = f64::from(fresnel::dielectric(cos_o, 1.5));
+                let r = f64::from(r);
+                let expected = (1.0 - f) * r * (1.0 - internal) / (1.0 - r * internal);
+                let (values, samples) = albedos(&b, cos_o);
+                assert!((values - expected).abs() < 0.003, "R {r}, cos {cos_o}: values {values}, expected {expected}");
+                let samples = samples - f;
+                assert!(
+                    (samples - expected).abs() < 0.003,
+                    "R {r}, cos {cos_o}: samples {samples}, expected {expected}"
+                );
+            }
+        }
+    }
 }
