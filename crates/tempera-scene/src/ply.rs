@@ -274,6 +274,29 @@ fn skip_element(body: &mut Body, el: &Element) -> Result<(), String> {
 /// Parses a PLY file's bytes. Errors are plain messages; the caller adds the file name.
 pub fn parse(data: &[u8]) -> Result<PlyMesh, String> {
     let (encoding, elements, start) = parse_header(data)?;
+    // Every record takes at least a few bytes (binary: its scalars and list counts; ASCII: one
+    // digit and one separator per property), so counts that the file cannot hold are refused
+    // before anything is allocated for them.
+    let mut least = 0u128;
+    for el in &elements {
+        let record: u128 = el
+            .props
+            .iter()
+            .map(|p| match (encoding, p) {
+                (Encoding::Ascii, _) => 2,
+                (_, Property::Scalar { ty, .. }) => ty.size() as u128,
+                (_, Property::List { count, .. }) => count.size() as u128,
+            })
+            .sum();
+        least += el.count as u128 * record.max(1);
+        let available = data.len().saturating_sub(start) as u128;
+        if least > available {
+            return Err(format!(
+                "element '{}' claims {} records, more than the file's {available} bytes of data can hold",
+                el.name, el.count
+            ));
+        }
+    }
     let mut body = Body { data, pos: start, encoding };
     let mut mesh = PlyMesh::default();
     for el in &elements {
@@ -349,5 +372,10 @@ element face 1\nproperty uchar flags\nproperty list uchar uint vertex_indices\ne
         let bad_index = ASCII.replace("4 0 1 2 3", "3 0 1 9");
         assert!(parse(bad_index.as_bytes()).unwrap_err().contains("vertex 9"));
         assert!(parse(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n").is_err());
+        // A count the file cannot hold is refused before anything is allocated for it.
+        let huge = b"ply\nformat binary_little_endian 1.0\nelement vertex 4000000000000\nproperty float x\n\
+property float y\nproperty float z\nend_header\n\0\0\0\0";
+        let e = parse(huge).unwrap_err();
+        assert!(e.contains("4000000000000") && e.contains("can hold"), "{e}");
     }
 }
