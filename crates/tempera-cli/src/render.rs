@@ -60,6 +60,18 @@ pub struct RenderArgs {
     /// errors.
     #[arg(long)]
     pub strict: bool,
+    /// The most memory the render may take, in GiB (default: what the machine has available);
+    /// a render whose buffers would need more refuses to start.
+    #[arg(long, value_name = "GIB", value_parser = parse_gib)]
+    pub max_memory: Option<u64>,
+}
+
+/// A positive size in GiB, as bytes.
+fn parse_gib(s: &str) -> Result<u64, String> {
+    match s.parse::<f64>() {
+        Ok(g) if g.is_finite() && g > 0.0 && g < 1.0e9 => Ok((g * (1u64 << 30) as f64) as u64),
+        _ => Err(format!("expected a positive number of GiB, got '{s}'")),
+    }
 }
 
 /// Checks the requested output files before any work is done.
@@ -124,7 +136,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let render_settings = RenderSettings { budget, seed: args.seed, threads: args.threads };
     run::install_interrupt_handler();
-    let out = Job::new(&scene, integrator.as_ref(), render_settings, args.quiet).run()?;
+    let job = Job { max_memory: args.max_memory, ..Job::new(&scene, integrator.as_ref(), render_settings, args.quiet) };
+    let out = job.run()?;
 
     let options = WriteOptions { exposure: args.exposure };
     for path in &outputs {

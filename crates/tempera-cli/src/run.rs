@@ -62,13 +62,24 @@ pub struct Job<'a> {
     /// Elapsed times at which `on_snapshot` receives the image so far (time budgets only).
     pub snapshots: &'a [Duration],
     pub on_snapshot: &'a (dyn Fn(usize, &RenderOutput) + Sync),
+    /// The most memory the render may take (bytes); `None`: what the machine has available.
+    pub max_memory: Option<u64>,
 }
 
 fn no_snapshot(_: usize, _: &RenderOutput) {}
 
 impl<'a> Job<'a> {
     pub fn new(scene: &'a Scene, integrator: &'a dyn Integrator, settings: RenderSettings, quiet: bool) -> Self {
-        Self { scene, integrator, settings, quiet, label: None, snapshots: &[], on_snapshot: &no_snapshot }
+        Self {
+            scene,
+            integrator,
+            settings,
+            quiet,
+            label: None,
+            snapshots: &[],
+            on_snapshot: &no_snapshot,
+            max_memory: None,
+        }
     }
 
     /// Renders with a progress bar, stopping on Ctrl-C (the output then says `cancelled`).
@@ -82,7 +93,9 @@ impl<'a> Job<'a> {
             Budget::Samples(_) => bar.inc(n),
             Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
         };
-        let control = RenderControl::new(&CANCEL, &on_progress).with_snapshots(self.snapshots, self.on_snapshot);
+        let control = RenderControl::new(&CANCEL, &on_progress)
+            .with_snapshots(self.snapshots, self.on_snapshot)
+            .with_max_memory(self.max_memory);
         let out = self.integrator.render(self.scene, &self.settings, &control);
         bar.finish_and_clear();
         out.map_err(anyhow::Error::msg)

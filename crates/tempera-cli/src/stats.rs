@@ -7,7 +7,8 @@ use tempera::integrator::RunStats;
 
 pub fn write(path: &Path, stats: &RunStats) -> Result<()> {
     let text = serde_json::to_string_pretty(stats).expect("statistics serialise");
-    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+    tempera_image::write_file_atomically(path, text.as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// A per-depth table of chain statistics on standard error.

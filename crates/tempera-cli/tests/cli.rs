@@ -66,6 +66,36 @@ fn bad_input_is_a_clear_error_not_a_panic() {
     assert_clean_error(&["render", "-o", "/no/such/folder/x.exr"], "does not exist");
 }
 
+/// A film larger than memory allows is refused before anything is allocated, naming the
+/// figure and the flag, for every integrator (a 60000² film with MMLT aborted in the allocator).
+#[test]
+fn renders_larger_than_memory_are_refused_before_allocating() {
+    let dir = scratch("memory");
+    let scene = dir.join("huge.pbrt");
+    std::fs::write(
+        &scene,
+        "Film \"rgb\" \"integer xresolution\" [60000] \"integer yresolution\" [60000]\n\
+         Camera \"perspective\"\nWorldBegin\nLightSource \"point\" \"point3 from\" [0 0 2]\n\
+         Shape \"sphere\" \"float radius\" 1\n",
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    for integrator in ["path", "bdpt", "mmlt", "pssmlt", "tempered"] {
+        let args = ["render", scene, "--integrator", integrator, "--mpp", "1", "-q", "--max-memory", "8"];
+        let args = if integrator == "path" || integrator == "bdpt" {
+            ["render", scene, "--integrator", integrator, "--spp", "1", "-q", "--max-memory", "8"]
+        } else {
+            args
+        };
+        assert_clean_error(&args, "8.0 GiB");
+        assert_clean_error(&args, "--max-memory");
+    }
+    // Without a limit the machine's available memory is the limit: 60000² pixels with a buffer
+    // per depth is far beyond any machine this runs on.
+    assert_clean_error(&["render", scene, "--integrator", "mmlt", "--mpp", "1", "-q"], "needs about");
+    assert_clean_error(&["render", "--max-memory", "0"], "GiB");
+}
+
 #[test]
 fn ctrl_c_stops_and_writes_the_image_so_far() {
     let dir = scratch("interrupt");

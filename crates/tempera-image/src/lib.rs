@@ -69,9 +69,43 @@ fn malformed(path: &Path, message: impl ToString) -> ImageError {
     ImageError::Malformed { path: path.to_owned(), message: message.to_string() }
 }
 
+/// A sibling of `path` to write into before renaming it into place: the same folder and
+/// extension (which names the format), hidden, with this process's id.
+fn partial_path(path: &Path) -> std::path::PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+    path.with_file_name(format!(".{name}.partial-{}{ext}", std::process::id()))
+}
+
+/// Writes `contents` to `path` through a temporary sibling renamed into place, so that a
+/// process killed at any moment leaves either the old file or the new one, never a part.
+pub fn write_file_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
+    let partial = partial_path(path);
+    std::fs::write(&partial, contents).and_then(|()| std::fs::rename(&partial, path)).inspect_err(|_| {
+        let _ = std::fs::remove_file(&partial);
+    })
+}
+
 /// Writes `image` in the format given by `path`'s extension. EXR and PFM are linear float;
-/// PNG is sRGB-encoded 8-bit after applying the exposure.
+/// PNG is sRGB-encoded 8-bit after applying the exposure. The file appears whole or not at
+/// all (written to a temporary sibling, then renamed).
 pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result<(), ImageError> {
+    Format::from_path(path).ok_or_else(|| ImageError::UnsupportedFormat { path: path.to_owned() })?;
+    let partial = partial_path(path);
+    let written = write_image_to(&partial, image, options).and_then(|()| {
+        std::fs::rename(&partial, path).map_err(|e| malformed(path, format!("cannot rename into place: {e}")))
+    });
+    if written.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    written.map_err(|e| match e {
+        ImageError::Malformed { message, .. } => malformed(path, message),
+        ImageError::Io { source, .. } => ImageError::Io { path: path.to_owned(), source },
+        other => other,
+    })
+}
+
+fn write_image_to(path: &Path, image: &Image, options: &WriteOptions) -> Result<(), ImageError> {
     let format = Format::from_path(path).ok_or_else(|| ImageError::UnsupportedFormat { path: path.to_owned() })?;
     match format {
         Format::Exr => exr::prelude::write_rgb_file(path, image.width, image.height, |x, y| {
@@ -210,6 +244,29 @@ mod tests {
         }
         let gamma = ColorEncoding::Gamma(2.2).decode(0.5);
         assert!((gamma - 0.5f32.powf(2.2)).abs() < 1e-6);
+    }
+
+    /// Files appear whole: written beside the target and renamed over it, leaving no partial
+    /// file behind, also when the write fails (an unwritable folder names the target).
+    #[test]
+    fn writes_replace_files_whole_and_leave_nothing_behind() {
+        let dir = std::env::temp_dir().join(format!("tempera-atomic-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = dir.join("results.csv");
+        write_file_atomically(&text, b"old").unwrap();
+        write_file_atomically(&text, b"new contents").unwrap();
+        assert_eq!(std::fs::read(&text).unwrap(), b"new contents");
+        for name in ["a.exr", "a.pfm", "a.png"] {
+            write_image(&dir.join(name), &sample_image(), &WriteOptions::default()).unwrap();
+            write_image(&dir.join(name), &sample_image(), &WriteOptions::default()).unwrap();
+        }
+        let names: Vec<String> =
+            std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        assert!(names.iter().all(|n| !n.contains("partial")), "{names:?}");
+        assert_eq!(names.len(), 4, "{names:?}");
+        let missing = dir.join("no-such-folder").join("b.exr");
+        let e = write_image(&missing, &sample_image(), &WriteOptions::default()).unwrap_err().to_string();
+        assert!(e.contains("no-such-folder/b.exr") && !e.contains("partial"), "{e}");
     }
 
     #[test]

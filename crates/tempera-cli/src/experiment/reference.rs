@@ -146,7 +146,7 @@ fn render(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Referen
     std::fs::create_dir_all(exr.parent().expect("reference paths have a folder"))?;
     write_image(&exr, &out.image, &WriteOptions::default())?;
     let key = key(config, scene);
-    std::fs::write(&json, serde_json::to_string_pretty(&key).expect("keys serialise"))
+    tempera_image::write_file_atomically(&json, serde_json::to_string_pretty(&key).expect("keys serialise").as_bytes())
         .with_context(|| format!("cannot write {}", json.display()))?;
     Ok(Reference { image: out.image, key })
 }

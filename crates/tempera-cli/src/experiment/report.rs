@@ -360,6 +360,7 @@ pub fn write(
         })
         .context("rendering report.html")?;
     let path = config.output.join("report.html");
-    std::fs::write(&path, html).with_context(|| format!("cannot write {}", path.display()))?;
+    tempera_image::write_file_atomically(&path, html.as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(path)
 }

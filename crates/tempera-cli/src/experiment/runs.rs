@@ -128,7 +128,8 @@ impl Job<'_> {
             let path = self.record_path();
             std::fs::create_dir_all(path.parent().expect("record paths have a folder"))?;
             let text = serde_json::to_string_pretty(record).expect("records serialise");
-            std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+            tempera_image::write_file_atomically(&path, text.as_bytes())
+                .with_context(|| format!("cannot write {}", path.display()))?;
             if let Some(last) = record.rows.last() {
                 eprintln!(
                     "{label}: relMSE {:.4e}, FLIP {:.4}, {:.1} samples or mutations/pixel in {:.1} s",
@@ -252,7 +253,8 @@ pub fn write_results(config: &Config, rows: &[&Row]) -> Result<()> {
     }
     let write = |name: &str, text: &str| {
         let path: &Path = &config.output.join(name);
-        std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+        tempera_image::write_file_atomically(path, text.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))
     };
     write("results.csv", &csv)?;
     write("results.json", &serde_json::to_string_pretty(rows).expect("rows serialise"))

@@ -76,7 +76,7 @@ impl TileBuffer {
             y0,
             width,
             height,
-            sums: vec![[0.0; 4]; (width * height) as usize],
+            sums: vec![[0.0; 4]; width as usize * height as usize],
             filter: film.filter,
             invalid_samples: 0,
         }

@@ -34,7 +34,7 @@ fn fixed(v: f32) -> i128 {
 
 impl SplatBuffer {
     pub fn new(width: u32, height: u32) -> Self {
-        Self { width, height, sums: vec![[0; 3]; (width * height) as usize], invalid: 0 }
+        Self { width, height, sums: vec![[0; 3]; width as usize * height as usize], invalid: 0 }
     }
 
     /// Adds `l` to the pixel containing raster position `p` (box reconstruction).

@@ -132,7 +132,16 @@ impl Integrator for BdptIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        let bytes = self.memory_estimate(scene, settings.threads);
+        control.check_memory(bytes, "the film and a light-tracing splat buffer per thread")?;
         Ok(render_tiles(self, scene, settings, control))
+    }
+
+    fn memory_estimate(&self, scene: &Scene, threads: usize) -> u64 {
+        use super::memory::{FILM_BYTES, SPLAT_BYTES, pixels};
+        let threads = if threads == 0 { rayon::current_num_threads() } else { threads } as u64;
+        let layers = 1 + self.layer_names().len() as u64;
+        pixels(scene).saturating_mul(FILM_BYTES + (threads + 1) * layers * SPLAT_BYTES)
     }
 }
 

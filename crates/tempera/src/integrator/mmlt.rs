@@ -67,6 +67,7 @@ impl Integrator for MmltIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        control.check_memory(self.memory_estimate(scene, settings.threads), "a splat buffer per path depth")?;
         let depths = self.max_depth as usize + 1;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_spread_allocation(self.spread_allocation);
@@ -75,5 +76,10 @@ impl Integrator for MmltIntegrator {
             let k = cx.group.k;
             Single::start(cx, target(k))
         })
+    }
+
+    fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {
+        use crate::integrator::memory::{SHARED_SPLAT_BYTES, pixels};
+        pixels(scene).saturating_mul(12 + (u64::from(self.max_depth) + 1) * SHARED_SPLAT_BYTES)
     }
 }

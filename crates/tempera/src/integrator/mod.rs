@@ -3,6 +3,7 @@
 //! driver in [`tiles`].
 
 pub mod bdpt;
+pub mod memory;
 pub mod mmlt;
 pub mod path;
 pub mod pssmlt;
@@ -58,6 +59,8 @@ pub struct RenderControl<'a> {
     /// budget are never reached: the render's own output is the last picture.
     pub snapshots: &'a [Duration],
     pub on_snapshot: &'a (dyn Fn(usize, &RenderOutput) + Sync),
+    /// The most memory a render may take, in bytes; `None`: what the machine has available.
+    pub max_memory: Option<u64>,
 }
 
 fn no_snapshot(_: usize, _: &RenderOutput) {}
@@ -65,7 +68,17 @@ fn no_snapshot(_: usize, _: &RenderOutput) {}
 impl<'a> RenderControl<'a> {
     /// A control without snapshots.
     pub fn new(cancel: &'a AtomicBool, on_progress: &'a (dyn Fn(u64) + Sync)) -> Self {
-        Self { cancel, on_progress, snapshots: &[], on_snapshot: &no_snapshot }
+        Self { cancel, on_progress, snapshots: &[], on_snapshot: &no_snapshot, max_memory: None }
+    }
+
+    /// The same control with a memory limit of `bytes` instead of the available memory.
+    pub fn with_max_memory(self, bytes: Option<u64>) -> Self {
+        Self { max_memory: bytes, ..self }
+    }
+
+    /// Refuses a render that would need more than `bytes` (see [`memory::check`]).
+    pub fn check_memory(&self, bytes: u64, what: &str) -> Result<(), String> {
+        memory::check(bytes, self.max_memory, what)
     }
 
     /// The same control, also taking snapshots at `times` (see [`RenderControl::snapshots`]).
@@ -108,4 +121,7 @@ pub trait Integrator: Send + Sync {
     /// which no light path reaches the camera).
     fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl)
     -> Result<RenderOutput, String>;
+    /// A conservative estimate of the bytes the render allocates, checked before it starts
+    /// ([`RenderControl::check_memory`]).
+    fn memory_estimate(&self, scene: &Scene, threads: usize) -> u64;
 }

@@ -158,6 +158,11 @@ impl Integrator for PathIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        control.check_memory(self.memory_estimate(scene, settings.threads), "the film")?;
         Ok(render_tiles(self, scene, settings, control))
+    }
+
+    fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {
+        super::memory::pixels(scene).saturating_mul(super::memory::FILM_BYTES)
     }
 }

@@ -51,6 +51,7 @@ impl Integrator for PssmltIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        control.check_memory(self.memory_estimate(scene, settings.threads), "the splat buffer")?;
         let chain = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
         let target = |_| FullTarget { scene, max_depth: self.max_depth };
         let mut out = chain.render(scene, settings, control, 1, target, |cx| Single::start(cx, target(0)))?;
@@ -58,5 +59,10 @@ impl Integrator for PssmltIntegrator {
             d.all_depths = true;
         }
         Ok(out)
+    }
+
+    fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {
+        use crate::integrator::memory::{SHARED_SPLAT_BYTES, pixels};
+        pixels(scene).saturating_mul(12 + SHARED_SPLAT_BYTES)
     }
 }

@@ -172,11 +172,19 @@ impl Integrator for TemperedIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        let bytes = self.memory_estimate(scene, settings.threads);
+        control.check_memory(bytes, "a splat buffer per path depth and contributing replica")?;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_spread_allocation(self.spread_allocation);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::new(scene, depth, self.tempering(), 0.0);
         let depths = self.max_depth as usize + 1;
         chains.render(scene, settings, control, depths, main, |cx| self.start_ensemble(scene, &ladder, cx))
+    }
+
+    fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {
+        use crate::integrator::memory::{SHARED_SPLAT_BYTES, pixels};
+        let layers = if self.reuse_replicas { self.replicas.max(1) } else { 1 } as u64;
+        pixels(scene).saturating_mul(12 + (u64::from(self.max_depth) + 1) * layers * SHARED_SPLAT_BYTES)
     }
 }
