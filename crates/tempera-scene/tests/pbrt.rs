@@ -107,7 +107,7 @@ fn syntax_errors_name_file_line_and_column() {
         ("AttributeBegin\nShape \"sphere\"", "mem.pbrt:1:1: AttributeBegin without a matching end"),
         ("Shape \"sphere\" \"float radius\" \"abc\"", "\"float\" parameter cannot hold strings"),
         ("Camera \"orthographic\"", "camera \"orthographic\" is not supported"),
-        ("MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"", "participating media are not supported"),
+        ("MakeNamedMedium \"fog\" \"string type\" \"cloud\"", "mem.pbrt:1:17: heterogeneous medium \"fog\""),
         ("\"float fov\" 30", "mem.pbrt:1:1: expected a directive, found string"),
         (
             "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 5]",
@@ -272,5 +272,49 @@ fn layered_materials_keep_every_parameter() {
     ] {
         let e = error(&format!("WorldBegin\nMaterial {material}\n"));
         assert!(e.contains("mem.pbrt:2:") && e.contains(expect), "{e}");
+    }
+}
+
+/// pbrt-v4's homogeneous media: `MakeNamedMedium` with its coefficients, `scale` and `g`; the
+/// camera in the outside medium current at `Camera` (defined later in the file); an
+/// `interface` shape bounding a medium; glass with a medium inside. Heterogeneous media,
+/// presets and unknown names are errors naming the line.
+#[test]
+fn homogeneous_media_load_with_their_interfaces() {
+    let text = "MediumInterface \"\" \"fog\"\nCamera \"perspective\"\n\
+        MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.1 0.2 0.3] \
+        \"rgb sigma_s\" [1 2 3] \"float scale\" 2 \"float g\" 0.4\n\
+        MakeNamedMedium \"ink\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [5 5 5] \"rgb sigma_s\" [0 0 0]\n\
+        WorldBegin\n\
+        AttributeBegin\n MediumInterface \"ink\" \"fog\"\n Material \"interface\"\n Shape \"sphere\"\nAttributeEnd\n\
+        AttributeBegin\n MediumInterface \"ink\" \"fog\"\n Material \"dielectric\"\n Translate 3 0 0\n Shape \"sphere\"\nAttributeEnd\n\
+        MediumInterface \"\" \"\"\nMaterial \"interface\"\n Shape \"sphere\" \"float radius\" 9\n";
+    let loaded = load_text(text).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let scene = loaded.builder.build().unwrap();
+    assert_eq!(scene.media.len(), 2);
+    let fog = scene.media[0];
+    assert!((fog.sigma_a - Vec3::new(0.2, 0.4, 0.6)).length() < 1e-6 && (fog.sigma_s.z - 6.0).abs() < 1e-6);
+    assert!((fog.g - 0.4).abs() < 1e-6);
+    assert_eq!(scene.camera_medium, Some(0));
+    // The interface sphere and the glass sphere bound media; the last interface sphere bounds
+    // none (the MediumInterface before it names none) and is dropped: pbrt-v4 makes it invisible.
+    assert_eq!(scene.geometry.shapes.len(), 2);
+    let ray = tempera::geometry::Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
+    let hit = scene.intersect(&ray).unwrap();
+    assert!(scene.is_interface(&hit));
+    assert_eq!(scene.medium_after(&hit, ray.d, Some(0)), Some(1), "entering the sphere enters the ink");
+    let glass = scene.intersect(&tempera::geometry::Ray::new(Vec3::new(3.0, 0.0, 5.0), ray.d)).unwrap();
+    assert!(!scene.is_interface(&glass));
+    assert_eq!(scene.medium_after(&glass, -ray.d, Some(1)), Some(0), "leaving the glass enters the fog");
+
+    for (bad, expect) in [
+        ("MakeNamedMedium \"a\" \"string type\" \"uniformgrid\"", "heterogeneous medium \"a\""),
+        ("MakeNamedMedium \"a\" \"string type\" \"homogeneous\" \"string preset\" \"Wholemilk\"", "preset"),
+        ("MakeNamedMedium \"a\" \"string type\" \"homogeneous\" \"float g\" 1", "\"g\""),
+        ("MediumInterface \"nope\" \"\"\nShape \"sphere\"", "mem.pbrt:3:7: unknown medium \"nope\""),
+    ] {
+        let e = error(&format!("WorldBegin\n{bad}\n"));
+        assert!(e.contains("mem.pbrt:") && e.contains(expect), "{bad}: {e}");
     }
 }

@@ -15,6 +15,7 @@ pub mod film;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod medium;
 pub mod sampler;
 pub mod scene;
 pub mod scenes;

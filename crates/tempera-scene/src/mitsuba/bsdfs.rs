@@ -167,6 +167,7 @@ impl Loader {
                 Material::Plastic(_) => "plastic",
                 Material::Layered(_) => "layered",
                 Material::Mix(_) => "blend",
+                Material::Interface => "interface",
             };
             if !matches!(ty.as_str(), "twosided" | "bumpmap" | "mask") {
                 *self.cx.info.materials.entry(name.to_owned()).or_default() += 1;

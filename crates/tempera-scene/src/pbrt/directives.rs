@@ -4,13 +4,15 @@
 use super::lexer::{Lexer, TokenKind, unescape};
 use super::params::ParamSet;
 use super::state::{self, MaterialSlot};
+use super::textures::SpectrumUse;
 use super::{Block, Loader};
 use crate::LoadError;
 use crate::diagnostics::Loc;
 use tempera::camera::CameraDesc;
 use tempera::film::Filter;
 use tempera::integrator::IntegratorKind;
-use tempera::math::{Mat4, Vec3};
+use tempera::math::{Mat4, Rgb, Vec3};
+use tempera::medium::{Medium, MediumInterface};
 
 /// Reads a quoted-string argument.
 pub(super) fn string_arg(lx: &mut Lexer, what: &str) -> Result<(String, Loc), LoadError> {
@@ -281,35 +283,88 @@ impl Loader {
         Ok(())
     }
 
-    /// Participating media, which are refused with a clear message (or ignored when a
-    /// `MediumInterface` names none).
+    /// Participating media: pbrt-v4's `homogeneous` medium (`sigma_a`, `sigma_s`, `scale`,
+    /// `g`) and `MediumInterface`; heterogeneous media are refused with a clear message.
     fn medium_directive(&mut self, name: &str, lx: &mut Lexer) -> Result<(), LoadError> {
         match name {
             "MakeNamedMedium" => {
                 let (n, at) = string_arg(lx, "medium name")?;
                 let params = ParamSet::parse(lx)?;
-                let ty = params.string("type")?.unwrap_or("").to_owned();
-                return Err(LoadError::Syntax {
-                    loc: at,
-                    message: format!("participating media are not supported (medium \"{n}\" of type \"{ty}\")"),
-                });
+                let medium = self.homogeneous_medium(&n, &params, &at)?;
+                let index = self.cx.builder.add_medium(medium);
+                self.named.media.insert(n, index);
+                *self.cx.info.materials.entry("medium homogeneous".to_owned()).or_default() += 1;
+                self.report_unused(&params, "MakeNamedMedium")?;
             }
             "MediumInterface" => {
-                let (inside, at) = string_arg(lx, "medium name")?;
+                let (inside, _) = string_arg(lx, "medium name")?;
                 let outside = match lx.peek()? {
                     Some(t) if matches!(t.kind, TokenKind::Str(_)) => string_arg(lx, "medium name")?.0,
                     _ => inside.clone(),
                 };
-                if !inside.is_empty() || !outside.is_empty() {
-                    return Err(LoadError::Syntax {
-                        loc: at,
-                        message: "participating media are not supported (MediumInterface)".into(),
-                    });
-                }
+                self.state.media = (inside, outside);
             }
             _ => unreachable!("medium directives only"),
         }
         Ok(())
+    }
+
+    /// A `homogeneous` medium from its parameters; other medium types are errors.
+    fn homogeneous_medium(&mut self, name: &str, params: &ParamSet, at: &Loc) -> Result<Medium, LoadError> {
+        let syntax = |message: String| LoadError::Syntax { loc: at.clone(), message };
+        let ty = params.string("type")?.unwrap_or("").to_owned();
+        match ty.as_str() {
+            "homogeneous" => {}
+            "uniformgrid" | "nanovdb" | "cloud" | "rgbgrid" => {
+                return Err(syntax(format!(
+                    "heterogeneous medium \"{name}\" of type \"{ty}\" is not supported (only \"homogeneous\")"
+                )));
+            }
+            "" => return Err(syntax(format!("medium \"{name}\" needs a \"string type\""))),
+            other => return Err(syntax(format!("unknown medium type \"{other}\""))),
+        }
+        if let Some(preset) = params.string("preset")? {
+            return Err(syntax(format!(
+                "medium preset \"{preset}\" is not supported; give \"sigma_a\" and \"sigma_s\" instead"
+            )));
+        }
+        let constant = |loader: &mut Self, key: &str, default: Rgb| -> Result<Rgb, LoadError> {
+            match loader.spectrum_param(params, key, Some(default), SpectrumUse::Unitless)? {
+                Some(tempera::texture::Texture::Constant(c)) => Ok(c),
+                _ => Err(LoadError::Syntax { loc: at.clone(), message: format!("\"{key}\" must be a constant") }),
+            }
+        };
+        // pbrt-v4's defaults (per millimetre, a skim-milk-like medium).
+        let sigma_a = constant(self, "sigma_a", Rgb::new(0.0011, 0.0024, 0.014))?;
+        let sigma_s = constant(self, "sigma_s", Rgb::new(2.55, 3.21, 3.77))?;
+        let scale = params.float("scale", 1.0)? as f32;
+        let g = params.float("g", 0.0)? as f32;
+        let le = constant(self, "Le", Rgb::ZERO)?;
+        params.float("Lescale", 1.0)?;
+        if le.max_element() > 0.0 {
+            self.warn(Some(at), format!("medium \"{name}\": emission (\"Le\") is not supported and is ignored"))?;
+        }
+        let medium = Medium { sigma_a: sigma_a * scale, sigma_s: sigma_s * scale, g };
+        let valid = |c: Rgb| c.is_finite() && c.min_element() >= 0.0;
+        if !valid(medium.sigma_a) || !valid(medium.sigma_s) || g.is_nan() || g.abs() >= 1.0 {
+            return Err(syntax(format!(
+                "medium \"{name}\": coefficients must be finite and non-negative and \"g\" strictly between -1 and 1"
+            )));
+        }
+        Ok(medium)
+    }
+
+    /// The scene index of medium `name` ("" is vacuum).
+    pub(super) fn medium_index(&self, name: &str, at: &Loc) -> Result<Option<u32>, LoadError> {
+        if name.is_empty() {
+            return Ok(None);
+        }
+        self.named
+            .media
+            .get(name)
+            .copied()
+            .map(Some)
+            .ok_or_else(|| LoadError::Syntax { loc: at.clone(), message: format!("unknown medium \"{name}\"") })
     }
 
     fn option(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {
@@ -338,6 +393,9 @@ impl Loader {
             return Err(LoadError::Syntax { loc: at, message: "the camera transformation is not invertible".into() });
         }
         self.named.coord_systems.insert("camera".into(), camera_to_world);
+        // pbrt-v4: the camera sits in the outside medium of the current `MediumInterface`,
+        // which may be defined later in the file.
+        self.named.camera_medium = Some((self.state.media.1.clone(), at.clone()));
         let screen_window = match params.floats("screenwindow")? {
             Some(w) if w.len() == 4 => Some([w[0] as f32, w[1] as f32, w[2] as f32, w[3] as f32]),
             Some(_) => return Err(LoadError::Syntax { loc: at, message: "\"screenwindow\" needs 4 values".into() }),
@@ -490,12 +548,29 @@ impl Loader {
         material: &MaterialSlot,
         emission: Option<tempera::scene::AreaEmission>,
         alpha: Option<tempera::texture::Texture>,
-    ) {
+        at: &Loc,
+    ) -> Result<(), LoadError> {
+        let bounds_media = !self.state.media.0.is_empty() || !self.state.media.1.is_empty();
         if let Some((_, shapes, _)) = &mut self.object {
             shapes.push(super::state::ObjectShape { shape, material: material.clone(), emission, alpha });
-            return;
+            if bounds_media {
+                self.warn_once(
+                    "instance-media",
+                    None,
+                    "media boundaries inside object instances are not supported; those shapes bound no medium",
+                )?;
+            }
+            return Ok(());
         }
-        let Some(id) = self.material_id(material) else { return };
+        let id = match (self.material_id(material), bounds_media) {
+            (Some(id), _) => id,
+            // pbrt's `interface` material: invisible, unless it bounds media.
+            (None, false) => return Ok(()),
+            (None, true) => *self
+                .named
+                .interface_material
+                .get_or_insert_with(|| self.cx.builder.add_material(tempera::material::Material::Interface)),
+        };
         self.cx.info.shapes += 1;
         if emission.is_some() {
             *self.cx.info.lights.entry("area (diffuse)".to_owned()).or_default() += 1;
@@ -504,5 +579,12 @@ impl Loader {
             self.cx.info.triangles += m.indices.len();
         }
         self.cx.builder.add_shape_with_alpha(shape, id, emission, alpha);
+        if bounds_media {
+            let (inside, outside) = self.state.media.clone();
+            let interface =
+                MediumInterface { inside: self.medium_index(&inside, at)?, outside: self.medium_index(&outside, at)? };
+            self.cx.builder.set_shape_medium(self.cx.builder.shape_count() - 1, interface);
+        }
+        Ok(())
     }
 }

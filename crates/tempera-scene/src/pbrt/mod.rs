@@ -150,7 +150,11 @@ pub fn load_str(text: &str, path: &Path, options: &LoadOptions) -> Result<Loaded
     finish(loader)
 }
 
-fn finish(loader: Loader) -> Result<LoadedScene, LoadError> {
+fn finish(mut loader: Loader) -> Result<LoadedScene, LoadError> {
+    if let Some((name, at)) = loader.named.camera_medium.take() {
+        let medium = loader.medium_index(&name, &at)?;
+        loader.cx.builder.set_camera_medium(medium);
+    }
     if let Some((_, block, loc)) = loader.stack.last() {
         let what = if *block == Block::Attribute { "AttributeBegin" } else { "TransformBegin" };
         return Err(LoadError::Syntax { loc: loc.clone(), message: format!("{what} without a matching end") });

@@ -201,7 +201,7 @@ impl Loader {
         if let Some(shape) = shape {
             let material = self.state.material.clone();
             let emission = self.state.area_light.clone();
-            self.add_shape(shape, &material, emission, alpha);
+            self.add_shape(shape, &material, emission, alpha, &at)?;
         }
         Ok(())
     }

@@ -24,11 +24,19 @@ pub struct GraphicsState {
     pub reverse_orientation: bool,
     pub material: MaterialSlot,
     pub area_light: Option<AreaEmission>,
+    /// The current `MediumInterface`: inside and outside medium names ("" is vacuum).
+    pub media: (String, String),
 }
 
 impl Default for GraphicsState {
     fn default() -> Self {
-        Self { ctm: Mat4::IDENTITY, reverse_orientation: false, material: MaterialSlot::Default, area_light: None }
+        Self {
+            ctm: Mat4::IDENTITY,
+            reverse_orientation: false,
+            material: MaterialSlot::Default,
+            area_light: None,
+            media: (String::new(), String::new()),
+        }
     }
 }
 
@@ -47,6 +55,13 @@ pub struct Named {
     pub float_textures: HashMap<String, Texture>,
     pub spectrum_textures: HashMap<String, Texture>,
     pub coord_systems: HashMap<String, Mat4>,
+    /// Named media, by their index in the scene.
+    pub media: HashMap<String, u32>,
+    /// The medium the camera was declared in (the outside of the `MediumInterface` then
+    /// current), resolved when the file ends.
+    pub camera_medium: Option<(String, crate::diagnostics::Loc)>,
+    /// The interface material shared by surfaces that only bound media.
+    pub interface_material: Option<MaterialId>,
     /// Object definitions; `None` for objects with nothing visible in them.
     pub objects: HashMap<String, Option<PrototypeId>>,
 }

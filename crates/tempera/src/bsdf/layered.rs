@@ -33,9 +33,9 @@
 
 use super::dielectric::Lobes;
 use super::{BsdfSample, Conductor, Dielectric, Diffuse, TransportMode, fresnel};
-use crate::math::frame::Frame;
 use crate::math::rng::{Pcg32, hash};
 use crate::math::{Rgb, Vec2, Vec3, power_heuristic};
+use crate::medium::{hg, sample_hg};
 use std::f32::consts::PI;
 
 /// The base of a layered BSDF: reflection only.
@@ -94,30 +94,6 @@ pub struct Layered {
 /// The transmittance through a slab of thickness `dz` along `w` (unit extinction).
 fn tr(dz: f32, w: Vec3) -> f32 {
     if dz.abs() <= f32::MIN_POSITIVE { 1.0 } else { (-(dz / w.z).abs()).exp() }
-}
-
-/// The Henyey–Greenstein phase function for directions `wo`, `wi` both pointing away from
-/// the scattering point (`g > 0` scatters forward, towards `−wo`).
-fn hg(wo: Vec3, wi: Vec3, g: f32) -> f32 {
-    let denom = 1.0 + g * g + 2.0 * g * wo.dot(wi);
-    (1.0 - g * g) / (4.0 * PI * denom * denom.max(0.0).sqrt())
-}
-
-/// Samples the Henyey–Greenstein phase function around `wo`; returns `wi` and its density
-/// (the phase function's value).
-fn sample_hg(wo: Vec3, g: f32, u: Vec2) -> (Vec3, f32) {
-    // Cosine of the angle to the forward direction −wo, inverted from the HG distribution.
-    let cos = if g.abs() < 1e-3 {
-        1.0 - 2.0 * u.x
-    } else {
-        let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u.x);
-        ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
-    };
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    let frame = Frame::from_z(-wo);
-    let wi = frame.to_world(Vec3::new(sin * phi.cos(), sin * phi.sin(), cos)).normalize();
-    (wi, hg(wo, wi, g))
 }
 
 /// A generator for one estimate, seeded by the directions (and `extra`).

@@ -14,6 +14,8 @@ pub mod tempered;
 pub mod tiles;
 
 #[cfg(test)]
+mod media_tests;
+#[cfg(test)]
 mod tests;
 
 pub use bdpt::{BdptIntegrator, Strategies};
@@ -108,6 +110,16 @@ pub struct RenderOutput {
     pub layers: Vec<Image>,
     /// Per-depth Markov-chain statistics (MCMC integrators only).
     pub chains: Vec<crate::mcmc::DepthStats>,
+}
+
+/// Integrators that do not yet trace participating media refuse scenes that hold them.
+pub(crate) fn without_media(scene: &Scene, integrator: &str) -> Result<(), String> {
+    if scene.has_media() {
+        return Err(format!(
+            "{integrator} does not render participating media yet; the path tracer does (--integrator path)"
+        ));
+    }
+    Ok(())
 }
 
 /// A light-transport algorithm.

@@ -70,6 +70,196 @@ impl PathIntegrator {
     }
 }
 
+impl PathIntegrator {
+    /// Direct light at `p` by light sampling through participating media, MIS-weighted against
+    /// sampling the scattering function: `scatter(wi)` gives its value times the cosine (one
+    /// for a phase function) and its density; `ng` is the surface's normal (zero in a medium)
+    /// and `medium_towards(wi)` the medium a ray leaving along `wi` starts in.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_light_through_media<S: Sampler>(
+        &self,
+        scene: &Scene,
+        p: Vec3,
+        ng: Vec3,
+        scatter: impl Fn(Vec3) -> (Rgb, f32),
+        medium_towards: impl Fn(Vec3) -> Option<u32>,
+        sampler: &mut S,
+        rays: &mut u64,
+    ) -> Rgb {
+        let u_light = sampler.next_1d();
+        let u = sampler.next_2d();
+        let Some((index, pmf)) = scene.light_sampler.sample(u_light) else {
+            return Rgb::ZERO;
+        };
+        let Some(ls) = scene.lights[index].sample_li(&scene.geometry, p, u) else {
+            return Rgb::ZERO;
+        };
+        let (f, scatter_pdf) = scatter(ls.wi);
+        if f.max_element() <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let to_infinity = !ls.dist.is_finite();
+        let target = if to_infinity { ls.wi } else { ls.p };
+        let tr = scene.transmittance(p, ng, target, to_infinity, medium_towards(ls.wi), rays);
+        if tr.max_element() <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let light_pdf = pmf * ls.pdf;
+        let w = if ls.delta { 1.0 } else { power_heuristic(light_pdf, scatter_pdf) };
+        f * tr * ls.li * (w / light_pdf)
+    }
+
+    /// [`PixelEstimator::li`] in a scene with homogeneous participating media (pbrt-v4's
+    /// `volpath` for them): free flights sampled per channel ([`crate::medium::Medium::sample_flight`]),
+    /// scattering in media counted as a bounce, next-event estimation through media and
+    /// interface surfaces (their transmittance), and surfaces that only bound media crossed
+    /// without a bounce.
+    fn li_media<S: Sampler>(&self, scene: &Scene, mut ray: Ray, sampler: &mut S, rays: &mut u64) -> Rgb {
+        use crate::medium::Flight;
+        let mut l = Rgb::ZERO;
+        let mut beta = Rgb::ONE;
+        let mut prev = PrevVertex { p: ray.o, bsdf_pdf: 0.0, specular: true };
+        let mut depth = 0u32;
+        let mut medium = scene.camera_medium;
+        let mut crossings = 0u32;
+        loop {
+            *rays += 1;
+            let hit = scene.intersect(&ray);
+            if let Some(m) = medium {
+                let t_max = hit.as_ref().map_or(f32::INFINITY, |it| it.t);
+                let med = &scene.media[m as usize];
+                match med.sample_flight(sampler.next_1d(), sampler.next_1d(), t_max) {
+                    Flight::Scatter { t, weight } => {
+                        beta *= weight;
+                        if !beta.is_finite() || beta.max_element() <= 0.0 || depth == self.max_depth {
+                            break;
+                        }
+                        depth += 1;
+                        let p = ray.o + ray.d * t;
+                        let wo = -ray.d;
+                        if self.next_event {
+                            let phase = |wi: Vec3| {
+                                let f = med.phase(wo, wi);
+                                (Rgb::splat(f), f)
+                            };
+                            l += beta
+                                * self.sample_light_through_media(
+                                    scene,
+                                    p,
+                                    Vec3::ZERO,
+                                    phase,
+                                    |_| medium,
+                                    sampler,
+                                    rays,
+                                );
+                        }
+                        // The phase function is sampled exactly: its weight is one.
+                        let (wi, pdf) = med.sample_phase(wo, sampler.next_2d());
+                        prev = PrevVertex { p, bsdf_pdf: pdf, specular: false };
+                        ray = Ray::new(p, wi);
+                        if !self.roulette(&mut beta, depth, sampler) {
+                            break;
+                        }
+                        continue;
+                    }
+                    Flight::Through { weight } => {
+                        beta *= weight;
+                        if !beta.is_finite() || beta.max_element() <= 0.0 {
+                            break;
+                        }
+                    }
+                }
+            }
+            let Some(it) = hit else {
+                for &i in &scene.infinite_lights {
+                    let light = &scene.lights[i as usize];
+                    let w = if prev.specular || !self.next_event {
+                        1.0
+                    } else {
+                        power_heuristic(prev.bsdf_pdf, scene.light_sampler.pmf(i as usize) * light.pdf_li_dir(ray.d))
+                    };
+                    l += beta * light.le(ray.d) * w;
+                }
+                break;
+            };
+            if scene.is_interface(&it) {
+                crossings += 1;
+                if crossings > 4096 {
+                    break;
+                }
+                medium = scene.medium_after(&it, ray.d, medium);
+                ray = spawn_ray(it.surface.p, it.surface.ng, ray.d);
+                continue;
+            }
+            if let Some((index, light)) = scene.area_light(it.prim) {
+                let le = scene.emitted(&it);
+                if le.max_element() > 0.0 {
+                    let w = if prev.specular || !self.next_event {
+                        1.0
+                    } else {
+                        let light_pdf = scene.light_sampler.pmf(index as usize)
+                            * light.pdf_li_area(&scene.geometry, prev.p, &it.surface);
+                        power_heuristic(prev.bsdf_pdf, light_pdf)
+                    };
+                    l += beta * le * w;
+                }
+            }
+            if depth == self.max_depth {
+                break;
+            }
+            depth += 1;
+            let bsdf = scene.bsdf(&it);
+            if self.next_event && !bsdf.is_delta() {
+                let surface = |wi: Vec3| {
+                    let f = bsdf.eval(it.wo, wi, TransportMode::Radiance) * wi.dot(bsdf.frame.n).abs();
+                    (f, bsdf.pdf(it.wo, wi))
+                };
+                let towards = |wi: Vec3| scene.medium_after(&it, wi, medium);
+                l += beta
+                    * self.sample_light_through_media(
+                        scene,
+                        it.surface.p,
+                        it.surface.ng,
+                        surface,
+                        towards,
+                        sampler,
+                        rays,
+                    );
+            }
+            let uc = sampler.next_1d();
+            let u = sampler.next_2d();
+            let Some(bs) = bsdf.sample(it.wo, uc, u, TransportMode::Radiance) else {
+                break;
+            };
+            beta *= bs.f * (bs.wi.dot(bsdf.frame.n).abs() / bs.pdf);
+            if !beta.is_finite() || beta.max_element() <= 0.0 {
+                break;
+            }
+            let bsdf_pdf = if bs.proportional { bsdf.pdf(it.wo, bs.wi) } else { bs.pdf };
+            prev = PrevVertex { p: it.surface.p, bsdf_pdf, specular: bs.delta };
+            medium = scene.medium_after(&it, bs.wi, medium);
+            ray = spawn_ray(it.surface.p, it.surface.ng, bs.wi);
+            if !self.roulette(&mut beta, depth, sampler) {
+                break;
+            }
+        }
+        l
+    }
+
+    /// Russian roulette after [`RR_DEPTH`] bounces: false when the path ends, else the
+    /// throughput is divided by the survival probability.
+    fn roulette<S: Sampler>(&self, beta: &mut Rgb, depth: u32, sampler: &mut S) -> bool {
+        if depth > RR_DEPTH {
+            let q = (1.0 - beta.max_element()).max(0.0);
+            if sampler.next_1d() < q {
+                return false;
+            }
+            *beta /= 1.0 - q;
+        }
+        true
+    }
+}
+
 /// State carried from one vertex to the next for MIS of emission found by BSDF sampling.
 struct PrevVertex {
     p: Vec3,
@@ -85,6 +275,9 @@ impl PixelEstimator for PathIntegrator {
         let mut prev = PrevVertex { p: ray.o, bsdf_pdf: 0.0, specular: true };
         let mut depth = 0u32;
         sampler.start_stream(Stream::Camera);
+        if scene.has_media() {
+            return self.li_media(scene, ray, sampler, rays);
+        }
         loop {
             if depth > 0 {
                 *rays += 1;

@@ -185,6 +185,9 @@ pub enum Material {
     Dielectric(DielectricMaterial),
     Plastic(PlasticMaterial),
     Layered(LayeredMaterial),
+    /// pbrt-v4's `interface`: a surface that only bounds participating media; rays pass
+    /// through it (see `Scene::is_interface`).
+    Interface,
     /// Resolved by the scene, which knows the other materials (see `Scene::bsdf`).
     Mix(MixMaterial),
 }
@@ -202,7 +205,7 @@ impl Material {
                 reflectance: (m.reflectance.eval(uv) * m.scale).clamp(Rgb::ZERO, Rgb::ONE),
                 transmittance: (m.transmittance.eval(uv) * m.scale).clamp(Rgb::ZERO, Rgb::ONE),
             }),
-            Material::Mix(_) => Bsdf::Diffuse(Diffuse { reflectance: Rgb::ZERO }),
+            Material::Mix(_) | Material::Interface => Bsdf::Diffuse(Diffuse { reflectance: Rgb::ZERO }),
             Material::Diffuse(m) => {
                 Bsdf::Diffuse(Diffuse { reflectance: m.reflectance.eval(uv).clamp(Rgb::ZERO, Rgb::ONE) })
             }

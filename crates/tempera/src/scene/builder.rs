@@ -9,6 +9,7 @@ use crate::geometry::{Geometry, Instance, Prototype, Shape};
 use crate::light::{AreaLight, Light, LightSampler};
 use crate::material::Material;
 use crate::math::Mat4;
+use crate::medium::{Medium, MediumInterface};
 use crate::texture::Texture;
 
 /// Handle of a material added to a builder.
@@ -60,6 +61,8 @@ pub enum SceneError {
     InvalidShape { shape: usize, reason: String },
     #[error("invalid instance: {0}")]
     InvalidInstance(String),
+    #[error("invalid medium: {0}")]
+    InvalidMedium(String),
 }
 
 #[derive(Debug, Default)]
@@ -71,6 +74,9 @@ pub struct SceneBuilder {
     displacement: Vec<Option<Texture>>,
     one_sided: Vec<bool>,
     shape_alpha: Vec<Option<Texture>>,
+    shape_medium: Vec<Option<MediumInterface>>,
+    media: Vec<Medium>,
+    camera_medium: Option<u32>,
     prototypes: Vec<Vec<PrototypeShape>>,
     instances: Vec<(u32, Mat4)>,
     lights: Vec<Light>,
@@ -124,6 +130,31 @@ impl SceneBuilder {
         self.shape_material.push(material.0);
         self.shape_emission.push(emission);
         self.shape_alpha.push(alpha);
+        self.shape_medium.push(None);
+    }
+
+    /// The shapes added so far.
+    pub fn shape_count(&self) -> usize {
+        self.shapes.len()
+    }
+
+    /// Adds a homogeneous medium; returns its index for [`MediumInterface`]s.
+    pub fn add_medium(&mut self, medium: Medium) -> u32 {
+        self.media.push(medium);
+        self.media.len() as u32 - 1
+    }
+
+    /// Makes shape `shape` (an index below [`Self::shape_count`]) the boundary between the
+    /// media of `interface`.
+    pub fn set_shape_medium(&mut self, shape: usize, interface: MediumInterface) {
+        if let Some(slot) = self.shape_medium.get_mut(shape) {
+            *slot = Some(interface);
+        }
+    }
+
+    /// The medium the camera sits in.
+    pub fn set_camera_medium(&mut self, medium: Option<u32>) {
+        self.camera_medium = medium;
     }
 
     /// Adds geometry to be placed by instances; it is stored once however often it is placed.
@@ -187,6 +218,20 @@ impl SceneBuilder {
                 });
             }
         }
+        let known = |m: Option<u32>| m.is_none_or(|m| (m as usize) < self.media.len());
+        let interfaces = self.shape_medium.iter().flatten();
+        if !known(self.camera_medium) || interfaces.clone().any(|i| !known(i.inside) || !known(i.outside)) {
+            return Err(SceneError::InvalidMedium("a medium interface names a medium that does not exist".into()));
+        }
+        for m in &self.media {
+            let coefficients = [m.sigma_a, m.sigma_s];
+            if coefficients.iter().any(|c| !c.is_finite() || c.min_element() < 0.0) || m.g.is_nan() || m.g.abs() >= 1.0
+            {
+                return Err(SceneError::InvalidMedium(format!(
+                    "coefficients must be finite and non-negative and |g| below 1: {m:?}"
+                )));
+            }
+        }
         for (i, shape) in self.shapes.iter().enumerate() {
             let bad = match shape {
                 Shape::Sphere(s) => !(s.radius > 0.0 && s.radius.is_finite() && s.center.is_finite()),
@@ -246,6 +291,9 @@ impl SceneBuilder {
             displacement: self.displacement,
             one_sided: self.one_sided,
             shape_material: self.shape_material,
+            shape_medium: self.shape_medium,
+            media: self.media,
+            camera_medium: self.camera_medium,
             prim_light,
             light_sampler: LightSampler::new(&powers),
             lights,

@@ -16,6 +16,7 @@ use crate::light::{Light, LightSampler};
 use crate::material::Material;
 use crate::math::frame::Frame;
 use crate::math::{Rgb, Vec3};
+use crate::medium::{Medium, MediumInterface};
 use crate::texture::Texture;
 
 /// Sentinel for "no light" in the per-primitive light table.
@@ -65,6 +66,12 @@ pub struct Scene {
     /// Materials that are black seen from behind their geometric normal (Mitsuba's default).
     one_sided: Vec<bool>,
     shape_material: Vec<u32>,
+    /// The media each shape separates, where it bounds any (shapes outside instances).
+    shape_medium: Vec<Option<MediumInterface>>,
+    /// Homogeneous participating media ([`crate::medium`]).
+    pub media: Vec<Medium>,
+    /// The medium the camera sits in (`None`: vacuum).
+    pub camera_medium: Option<u32>,
     prim_light: Vec<u32>,
     pub lights: Vec<Light>,
     pub light_sampler: LightSampler,
@@ -94,6 +101,76 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         self.accel.occluded(&self.geometry, ray, t_max)
+    }
+
+    /// True when the scene holds participating media.
+    #[inline]
+    pub fn has_media(&self) -> bool {
+        !self.media.is_empty()
+    }
+
+    /// The media the hit surface separates, if it bounds any.
+    #[inline]
+    pub fn medium_interface(&self, it: &Interaction) -> Option<MediumInterface> {
+        if self.geometry.instance(it.prim).is_some() {
+            return None;
+        }
+        let shape = self.geometry.prims[it.prim as usize].shape as usize;
+        self.shape_medium.get(shape).copied().flatten()
+    }
+
+    /// True when the hit surface only bounds media (pbrt's `interface` material): rays pass
+    /// through it unchanged.
+    #[inline]
+    pub fn is_interface(&self, it: &Interaction) -> bool {
+        matches!(self.materials.get(it.material as usize), Some(Material::Interface))
+    }
+
+    /// The medium a ray in `current` is in after leaving the hit along `w`.
+    #[inline]
+    pub fn medium_after(&self, it: &Interaction, w: Vec3, current: Option<u32>) -> Option<u32> {
+        match self.medium_interface(it) {
+            Some(mi) => mi.towards(it.surface.ng, w),
+            None => current,
+        }
+    }
+
+    /// The transmittance from `p` (on a surface with geometric normal `ng`, or in a medium
+    /// where `ng` is zero) to `target` (a point, or a direction when `to_infinity`), starting in
+    /// `medium`: the product of every medium's transmittance along the way, through surfaces
+    /// that only bound media; zero when anything else blocks it. Counts the rays it traces.
+    pub fn transmittance(
+        &self,
+        p: Vec3,
+        ng: Vec3,
+        target: Vec3,
+        to_infinity: bool,
+        mut medium: Option<u32>,
+        rays: &mut u64,
+    ) -> Rgb {
+        use crate::geometry::{spawn_ray, spawn_ray_to};
+        let (mut ray, mut t_max) =
+            if to_infinity { (spawn_ray(p, ng, target), f32::INFINITY) } else { spawn_ray_to(p, ng, target) };
+        let mut tr = Rgb::ONE;
+        // Each crossing moves the origin past a surface; a bound keeps degenerate
+        // geometry from looping.
+        for _ in 0..256 {
+            *rays += 1;
+            let hit = self.intersect(&ray).filter(|it| it.t < t_max);
+            let along = hit.as_ref().map_or(t_max, |it| it.t);
+            if let Some(m) = medium {
+                tr *= self.media[m as usize].transmittance(along);
+            }
+            let Some(it) = hit else { return tr };
+            if !self.is_interface(&it) || tr.max_element() <= 0.0 {
+                return Rgb::ZERO;
+            }
+            medium = self.medium_after(&it, ray.d, medium);
+            let next = spawn_ray(it.surface.p, it.surface.ng, ray.d);
+            t_max = if to_infinity { f32::INFINITY } else { (target - next.o).dot(ray.d) * (1.0 - 1e-4) };
+            ray = next;
+        }
+        Rgb::ZERO
     }
 
     /// The light attached to primitive `prim`, if it emits.
