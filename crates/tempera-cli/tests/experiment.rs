@@ -241,3 +241,57 @@ fn an_interrupted_experiment_keeps_its_finished_runs() {
     assert_eq!(csv.lines().filter(|l| l.starts_with("default,bdpt,1,")).count(), 2, "{csv}");
     assert!(dir.join("out/report.html").exists());
 }
+
+/// Every file under `dir`, recursively.
+fn files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            out.extend(files(&path));
+        } else {
+            out.push(path);
+        }
+    }
+    out
+}
+
+/// `kill -9` at several moments (while the reference renders, between runs, mid-run), each
+/// time followed by nothing else: a re-run finishes the experiment, keeps what was finished,
+/// and leaves no truncated file: every record and result parses, every image reads, and the
+/// reference (a fixed budget) is byte for byte an uninterrupted experiment's.
+#[test]
+fn an_experiment_killed_at_any_moment_loses_nothing_finished() {
+    let config = TINY.replace("seeds = [1, 2]", "seeds = [1, 2, 3]");
+    let whole = scratch("kill-whole");
+    assert!(run(&whole, &config).status.success());
+    let dir = scratch("kill");
+    std::fs::write(dir.join("tiny.toml"), &config).unwrap();
+    for delay_ms in [150, 700, 1300, 2100, 2900] {
+        let mut child = tempera().current_dir(&dir).args(["experiment", "tiny.toml", "-q"]).spawn().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let _ = child.kill();
+        let _ = child.wait();
+        let before: Vec<PathBuf> = files(&dir.join("out/runs"));
+        for record in &before {
+            let text = std::fs::read_to_string(record).unwrap();
+            assert!(serde_json::from_str::<serde_json::Value>(&text).is_ok(), "{} is truncated", record.display());
+        }
+    }
+    let out = run(&dir, &config);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for file in files(&dir.join("out")) {
+        let name = file.to_string_lossy().into_owned();
+        if name.ends_with(".json") {
+            let text = std::fs::read_to_string(&file).unwrap();
+            assert!(serde_json::from_str::<serde_json::Value>(&text).is_ok(), "{name} is truncated");
+        } else if name.ends_with(".exr") || name.ends_with(".png") {
+            let img = tempera_image::read_image(&file, tempera_image::ColorEncoding::Srgb);
+            assert!(img.is_ok(), "{name} does not read: {:?}", img.err());
+        }
+    }
+    let rows = |d: &Path| std::fs::read_to_string(d.join("out/results.csv")).unwrap().lines().count();
+    assert_eq!(rows(&dir), rows(&whole), "every run is in the results");
+    let reference = |d: &Path| std::fs::read(d.join("out/reference/default.exr")).unwrap();
+    assert!(reference(&dir) == reference(&whole), "the reference is an uninterrupted run's");
+}
