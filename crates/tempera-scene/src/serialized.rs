@@ -84,7 +84,12 @@ pub fn parse(data: &[u8], index: usize) -> Result<SerializedMesh, String> {
         return Err(format!("not a Mitsuba serialized mesh (header {magic:#06x}, version {version})"));
     }
     let mut raw = Vec::new();
-    flate2::read::ZlibDecoder::new(&data[start + 4..])
+    // Deflate expands at most 1032-fold: a longer stream is not a valid mesh, and reading it
+    // whole would let a small file fill memory.
+    let compressed = &data[start + 4..];
+    let limit = compressed.len() as u64 * 1032 + 1024;
+    flate2::read::ZlibDecoder::new(compressed)
+        .take(limit)
         .read_to_end(&mut raw)
         .map_err(|e| format!("corrupt zlib stream: {e}"))?;
     let mut c = Cursor { data: &raw, pos: 0 };
@@ -110,6 +115,10 @@ pub fn parse(data: &[u8], index: usize) -> Result<SerializedMesh, String> {
         c.vec3s(nv, double)?;
     }
     let wide = nv > u32::MAX as usize;
+    let index_bytes = if wide { 24 } else { 12 };
+    if nt.checked_mul(index_bytes).is_none_or(|b| b > raw.len() - c.pos.min(raw.len())) {
+        return Err(format!("{nt} triangles do not fit in the mesh's {} bytes of data", raw.len()));
+    }
     let mut indices = Vec::with_capacity(nt);
     for _ in 0..nt {
         let mut t = [0u32; 3];
@@ -195,5 +204,22 @@ mod tests {
         let mut bad = bytes.clone();
         bad[0] = 0;
         assert!(parse(&bad, 0).is_err());
+    }
+
+    /// Inputs found by fuzzing (`fuzz/`): each is an error, not an abort.
+    #[test]
+    fn fuzzed_inputs_are_errors() {
+        // A triangle count of 2^32 in a 100-byte file: the index buffer was allocated (48 GB)
+        // before the data ran out.
+        let huge_triangle_count: &[u8] = &[
+            28, 4, 4, 0, 120, 156, 99, 16, 91, 96, 200, 77, 45, 206, 96, 96, 102, 128, 0, 70, 6, 108, 160, 193, 30, 23,
+            31, 164, 158, 9, 136, 1, 157, 61, 3, 67, 28, 4, 4, 0, 120, 156, 99, 16, 96, 96, 200, 77, 45, 206, 96, 96,
+            102, 128, 0, 70, 6, 116, 224, 224, 192, 192, 208, 96, 143, 96, 131, 0, 136, 15, 97, 131, 212, 51, 28, 1, 0,
+            195, 125, 4, 195, 0, 0, 0, 0, 0, 0, 0, 0, 36, 0, 0, 0, 0, 0, 0, 0, 2, 0, 0, 0,
+        ];
+        for index in [0, 1] {
+            let e = parse(huge_triangle_count, index).unwrap_err();
+            assert!(e.contains("triangles") || e.contains("implausible") || e.contains("corrupt"), "{e}");
+        }
     }
 }

@@ -107,7 +107,9 @@ fn errors_name_file_and_line() {
             &wrap("<bsdf type=\"conductor\" id=\"c\"><string name=\"material\" value=\"Unobtainium\"/></bsdf>"),
             "unknown conductor material",
         ),
-        (&wrap("<medium type=\"homogeneous\" id=\"m\"/>"), "participating media"),
+        (&wrap("<medium type=\"homogeneous\" id=\"m\"/>"), "needs sigmaA and sigmaS"),
+        (&wrap("<medium type=\"heterogeneous\" id=\"m\"/>"), "medium \"heterogeneous\" is not supported"),
+        (&wrap("<shape type=\"sphere\"><ref name=\"interior\" id=\"nope\"/></shape>"), "unknown medium \"nope\""),
         ("<scene version=\"3.0.0\"/>", "Mitsuba 3 scenes"),
         ("<notascene/>", "expected <scene>"),
         (&wrap("<include filename=\"missing.xml\"/>"), "missing.xml"),
@@ -226,4 +228,30 @@ fn deliberately_ignored_properties_are_listed_with_their_reason_not_warned() {
     );
     assert_eq!(loaded.warnings.len(), 1, "the unknown property still warns: {:?}", loaded.warnings);
     assert!(loaded.warnings[0].message.contains("\"bogus\""), "{:?}", loaded.warnings);
+}
+
+/// Mitsuba's homogeneous media: `sigmaA`/`sigmaS` or `sigmaT`/`albedo` times `scale`, the `hg`
+/// phase function's `g`, a shape's `interior`/`exterior` by reference or nested, a boundary
+/// without a BSDF made index-matched, and the sensor's medium.
+#[test]
+fn homogeneous_media_load_with_shapes_and_the_sensor() {
+    let text = format!(
+        "<scene version=\"0.6.0\">\n{}\n</scene>",
+        "<medium type=\"homogeneous\" id=\"fog\"><rgb name=\"sigmaA\" value=\"0.1, 0.2, 0.3\"/>\
+         <rgb name=\"sigmaS\" value=\"1, 1, 1\"/><float name=\"scale\" value=\"2\"/>\
+         <phase type=\"hg\"><float name=\"g\" value=\"0.5\"/></phase></medium>\n\
+         <sensor type=\"perspective\"><ref id=\"fog\"/></sensor>\n\
+         <shape type=\"sphere\"><ref name=\"exterior\" id=\"fog\"/>\
+         <medium name=\"interior\" type=\"homogeneous\"><rgb name=\"sigmaT\" value=\"4, 4, 4\"/>\
+         <rgb name=\"albedo\" value=\"0.25, 0.5, 1\"/></medium></shape>"
+    );
+    let loaded = load_mitsuba_str(&text, Path::new("mem.xml"), &LoadOptions::default()).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let scene = loaded.builder.build().unwrap();
+    assert_eq!(scene.media.len(), 2);
+    assert!((scene.media[0].sigma_a.z - 0.6).abs() < 1e-6 && (scene.media[0].g - 0.5).abs() < 1e-6);
+    assert!((scene.media[1].sigma_s - tempera::math::Vec3::new(1.0, 2.0, 4.0)).length() < 1e-6);
+    assert!((scene.media[1].sigma_a.x - 3.0).abs() < 1e-6);
+    assert_eq!(scene.camera_medium, Some(0));
+    assert!(matches!(scene.materials[0], tempera::material::Material::Interface), "{:?}", scene.materials);
 }

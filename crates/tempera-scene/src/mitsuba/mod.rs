@@ -5,6 +5,7 @@
 
 mod bsdfs;
 mod emitters;
+mod media;
 mod props;
 mod shapes;
 mod sky;
@@ -74,6 +75,8 @@ struct Loader {
     bsdfs: HashMap<String, BsdfDesc>,
     textures: HashMap<String, Texture>,
     groups: HashMap<String, Option<PrototypeId>>,
+    /// Named media, by their index in the scene.
+    media: HashMap<String, u32>,
 }
 
 impl Loader {
@@ -174,13 +177,16 @@ impl Loader {
             }
             "shape" => self.shape(ctx, n, None)?,
             "emitter" => self.emitter(ctx, n)?,
-            "medium" | "phase" | "subsurface" => {
+            "medium" => {
+                if n.attribute("id").is_none() {
+                    self.warn(Some(&loc), "a top-level <medium> without \"id\" cannot be used")?;
+                }
+                self.medium(ctx, n)?;
+            }
+            "phase" | "subsurface" => {
                 return Err(ctx.err(
                     &loc,
-                    format!(
-                        "<{}> (participating media and subsurface scattering) is not supported",
-                        n.tag_name().name()
-                    ),
+                    format!("<{}> outside a medium (subsurface scattering) is not supported", n.tag_name().name()),
                 ));
             }
             other => self.warn(Some(&loc), format!("unknown element <{other}> ignored"))?,
@@ -293,6 +299,14 @@ impl Loader {
             self.ignore(ctx, &sp, &["scramble", "dimension"], "Tempera's samplers are not low-discrepancy");
             self.report_unused(ctx, &sp, "sampler")?;
         }
+        // The medium the sensor sits in: a nested <medium> or a <ref> to one.
+        let medium = props.object("medium").or_else(|| {
+            props.objects("ref").into_iter().find(|r| r.attribute("id").is_some_and(|id| self.media.contains_key(id)))
+        });
+        if let Some(m) = medium {
+            let index = self.medium(ctx, m)?;
+            self.cx.builder.set_camera_medium(Some(index));
+        }
         self.report_unused(ctx, &props, &format!("sensor \"{ty}\""))
     }
 
@@ -382,6 +396,7 @@ fn new_loader(options: &LoadOptions) -> Loader {
         bsdfs: HashMap::new(),
         textures: HashMap::new(),
         groups: HashMap::new(),
+        media: HashMap::new(),
     }
 }
 

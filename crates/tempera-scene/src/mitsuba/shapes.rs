@@ -206,9 +206,20 @@ impl Loader {
         let to_world = props.transform(ctx, "toWorld")?.unwrap_or(Mat4::IDENTITY);
         let flip = props.bool(ctx, "flipNormals", false)?;
         let shape = self.geometry(ctx, &props, &ty, to_world, flip)?;
-        let bsdf_node = props.object("bsdf").or_else(|| props.object("ref"));
+        let media = self.shape_media(ctx, &props)?;
+        let bsdf_ref =
+            props.objects("ref").into_iter().find(|r| !matches!(r.attribute("name"), Some("interior" | "exterior")));
+        let bsdf_node = props.object("bsdf").or(bsdf_ref);
         let mut desc = match bsdf_node {
             Some(b) => self.bsdf(ctx, b)?,
+            // Mitsuba makes a medium boundary without a BSDF index-matched.
+            None if media.is_some() => super::bsdfs::BsdfDesc {
+                material: Some(tempera::material::Material::Interface),
+                one_sided: false,
+                displacement: None,
+                opacity: None,
+                id: None,
+            },
             None => super::bsdfs::BsdfDesc {
                 material: Some(tempera::material::Material::diffuse(Rgb::splat(0.5))),
                 one_sided: true,
@@ -251,6 +262,9 @@ impl Loader {
                     *self.cx.info.lights.entry("area".to_owned()).or_default() += 1;
                 }
                 self.cx.builder.add_shape_with_alpha(shape, material, emission, alpha);
+                if let Some(interface) = media {
+                    self.cx.builder.set_shape_medium(self.cx.builder.shape_count() - 1, interface);
+                }
             }
         }
         Ok(())
