@@ -67,7 +67,11 @@ fn mesh_offsets(data: &[u8]) -> Result<Vec<usize>, String> {
             } else {
                 u32::from_le_bytes(data[at..at + 4].try_into().expect("four bytes")) as usize
             };
-            if off + 4 > data.len() { Err("mesh offset beyond the end of the file".into()) } else { Ok(off) }
+            if off.checked_add(4).is_none_or(|end| end > data.len()) {
+                Err("mesh offset beyond the end of the file".into())
+            } else {
+                Ok(off)
+            }
         })
         .collect()
 }
@@ -217,6 +221,12 @@ mod tests {
             102, 128, 0, 70, 6, 116, 224, 224, 192, 192, 208, 96, 143, 96, 131, 0, 136, 15, 97, 131, 212, 51, 28, 1, 0,
             195, 125, 4, 195, 0, 0, 0, 0, 0, 0, 0, 0, 36, 0, 0, 0, 0, 0, 0, 0, 2, 0, 0, 0,
         ];
+        // A mesh offset of 2^64 − 1: adding the header's length wrapped around.
+        let wrapping_offset: &[u8] = &[
+            28, 4, 4, 0, 120, 156, 156, 99, 16, 96, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255,
+            255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 2, 0, 0, 0,
+        ];
+        assert!(parse(wrapping_offset, 0).unwrap_err().contains("offset"));
         for index in [0, 1] {
             let e = parse(huge_triangle_count, index).unwrap_err();
             assert!(e.contains("triangles") || e.contains("implausible") || e.contains("corrupt"), "{e}");
