@@ -151,7 +151,27 @@ pub fn read_image(path: &Path, encoding: ColorEncoding) -> Result<Image, ImageEr
     }
 }
 
+/// The most pixels an image file may declare (2^28: 3 GiB as linear RGB), checked before
+/// anything is allocated for them; compressed formats can declare far more pixels than their
+/// size suggests.
+pub const MAX_PIXELS: u64 = 1 << 28;
+
 fn read_exr(path: &Path) -> Result<Image, ImageError> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| malformed(path, e))?;
+    for header in &meta.headers {
+        let size = header.layer_size;
+        let pixels = size.width() as u64 * size.height() as u64;
+        if pixels > MAX_PIXELS {
+            return Err(malformed(
+                path,
+                format!(
+                    "declares {}x{} pixels, more than the {MAX_PIXELS} an image may have",
+                    size.width(),
+                    size.height()
+                ),
+            ));
+        }
+    }
     let image = exr::prelude::read_first_rgba_layer_from_file(
         path,
         |resolution, _| Image::filled(resolution.width(), resolution.height(), Rgb::ZERO),
@@ -267,6 +287,16 @@ mod tests {
         let missing = dir.join("no-such-folder").join("b.exr");
         let e = write_image(&missing, &sample_image(), &WriteOptions::default()).unwrap_err().to_string();
         assert!(e.contains("no-such-folder/b.exr") && !e.contains("partial"), "{e}");
+    }
+
+    /// Inputs found by fuzzing (`fuzz/`): each is an error naming the file, not an abort.
+    #[test]
+    fn fuzzed_images_are_errors() {
+        // An EXR whose data window declares billions of pixels in 34 KB: the image was
+        // allocated from the header before any pixel was read.
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/fuzz-huge-data-window.exr");
+        let e = read_image(&path, ColorEncoding::Linear).unwrap_err().to_string();
+        assert!(e.contains("fuzz-huge-data-window.exr"), "{e}");
     }
 
     #[test]
