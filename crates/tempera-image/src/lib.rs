@@ -151,10 +151,10 @@ pub fn read_image(path: &Path, encoding: ColorEncoding) -> Result<Image, ImageEr
     }
 }
 
-/// The most pixels an image file may declare (2^28: 3 GiB as linear RGB), checked before
+/// The most pixels an image file may declare (2^27, e.g. 16384×8192: 1.5 GiB as linear RGB), checked before
 /// anything is allocated for them; compressed formats can declare far more pixels than their
 /// size suggests.
-pub const MAX_PIXELS: u64 = 1 << 28;
+pub const MAX_PIXELS: u64 = 1 << 27;
 
 fn read_exr(path: &Path) -> Result<Image, ImageError> {
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| malformed(path, e))?;
