@@ -151,9 +151,9 @@ pub fn read_image(path: &Path, encoding: ColorEncoding) -> Result<Image, ImageEr
     }
 }
 
-/// The most pixels an image file may declare (2^27, e.g. 16384×8192: 1.5 GiB as linear RGB), checked before
-/// anything is allocated for them; compressed formats can declare far more pixels than their
-/// size suggests.
+/// The most pixels an image file may declare (2^27, e.g. 16384×8192: 1.5 GiB as linear
+/// RGB), checked before anything is allocated for them; compressed formats can declare far
+/// more pixels than their size suggests.
 pub const MAX_PIXELS: u64 = 1 << 27;
 
 fn read_exr(path: &Path) -> Result<Image, ImageError> {
