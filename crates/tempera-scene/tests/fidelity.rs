@@ -8,23 +8,15 @@
 //! taken as Tempera's per-sample noise at the reference's sample count (both are unidirectional
 //! path tracers of the same scene). Skipped, with a message, where `../shared` is absent.
 
-use std::path::{Path, PathBuf};
+mod shared;
+use shared::shared_scenes;
+use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use tempera::integrator::{Budget, Integrator, PathIntegrator, RenderControl, RenderSettings};
 use tempera::math::luminance;
 use tempera::texture::Image;
 use tempera_image::{ColorEncoding, read_image};
 use tempera_scene::{LoadOptions, load};
-
-fn shared_scenes() -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipping: {} not found (the real scenes live beside the project)", dir.display());
-        None
-    }
-}
 
 /// What a comparison with the reference found.
 #[derive(Debug)]

@@ -1,23 +1,14 @@
 //! The real scenes in `../shared/scenes` (when present): every pbrt-v4 scene loads without
 //! errors and renders, and the path-traced Cornell box agrees with Bitterli's Tungsten reference.
 
-use std::path::PathBuf;
+mod shared;
+use shared::shared_scenes;
 use std::sync::atomic::AtomicBool;
 use tempera::integrator::{Budget, Integrator, PathIntegrator, RenderControl, RenderSettings};
 use tempera::math::{Rgb, luminance};
 use tempera::scene::Scene;
 use tempera::texture::Image;
 use tempera_scene::{LoadOptions, load};
-
-fn shared_scenes() -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipping: {} not found (the real scenes live beside the project)", dir.display());
-        None
-    }
-}
 
 fn render(scene: &Scene, max_depth: u32, spp: u32) -> Image {
     let cancel = AtomicBool::new(false);

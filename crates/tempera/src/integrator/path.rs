@@ -191,18 +191,8 @@ impl PathIntegrator {
                 ray = spawn_ray(it.surface.p, it.surface.ng, ray.d);
                 continue;
             }
-            if let Some((index, light)) = scene.area_light(it.prim) {
-                let le = scene.emitted(&it);
-                if le.max_element() > 0.0 {
-                    let w = if prev.specular || !self.next_event {
-                        1.0
-                    } else {
-                        let light_pdf = scene.light_sampler.pmf(index as usize)
-                            * light.pdf_li_area(&scene.geometry, prev.p, &it.surface);
-                        power_heuristic(prev.bsdf_pdf, light_pdf)
-                    };
-                    l += beta * le * w;
-                }
+            if let Some((le, w)) = self.emission(scene, &it, &prev) {
+                l += beta * le * w;
             }
             if depth == self.max_depth {
                 break;
@@ -260,6 +250,26 @@ impl PathIntegrator {
     }
 }
 
+impl PathIntegrator {
+    /// Emission of the hit surface towards the path and its MIS weight against having
+    /// sampled the light from the previous vertex; `None` where the surface does not emit.
+    fn emission(&self, scene: &Scene, it: &Interaction, prev: &PrevVertex) -> Option<(Rgb, f32)> {
+        let (index, light) = scene.area_light(it.prim)?;
+        let le = scene.emitted(it);
+        if le.max_element() <= 0.0 {
+            return None;
+        }
+        let w = if prev.specular || !self.next_event {
+            1.0
+        } else {
+            let light_pdf =
+                scene.light_sampler.pmf(index as usize) * light.pdf_li_area(&scene.geometry, prev.p, &it.surface);
+            power_heuristic(prev.bsdf_pdf, light_pdf)
+        };
+        Some((le, w))
+    }
+}
+
 /// State carried from one vertex to the next for MIS of emission found by BSDF sampling.
 struct PrevVertex {
     p: Vec3,
@@ -295,18 +305,8 @@ impl PixelEstimator for PathIntegrator {
                 }
                 break;
             };
-            if let Some((index, light)) = scene.area_light(it.prim) {
-                let le = scene.emitted(&it);
-                if le.max_element() > 0.0 {
-                    let w = if prev.specular || !self.next_event {
-                        1.0
-                    } else {
-                        let light_pdf = scene.light_sampler.pmf(index as usize)
-                            * light.pdf_li_area(&scene.geometry, prev.p, &it.surface);
-                        power_heuristic(prev.bsdf_pdf, light_pdf)
-                    };
-                    l += beta * le * w;
-                }
+            if let Some((le, w)) = self.emission(scene, &it, &prev) {
+                l += beta * le * w;
             }
             if depth == self.max_depth {
                 break;
