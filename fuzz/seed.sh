@@ -4,7 +4,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 corpus="$root/fuzz/corpus"
-mkdir -p "$corpus"/{pbrt,mitsuba,ply,serialized,image}
+mkdir -p "$corpus"/{pbrt,mitsuba,ply,serialized,image,experiment}
 fixtures="$root/crates/tempera-scene/tests/fixtures"
 shared="$root/../shared/scenes"
 copy() { # target, files...
@@ -25,6 +25,7 @@ if [ -d "$shared" ]; then
   copy ply $(find "$shared" -name '*.ply' -size -64k | head -20)
   copy serialized $(find "$shared" -name '*.serialized' -size -64k | head -5)
 fi
+copy experiment "$root"/experiments/*.toml
 # Images: the first byte picks the reader (0 PFM, 1 EXR, 2 PNG, 3 TGA, 4 JPEG).
 i=0
 for f in $(find "$root/crates" "$shared" -name '*.pfm' -size -64k 2>/dev/null | head -5); do

@@ -1,16 +1,9 @@
-//! The `tempera` command-line renderer: one module per subcommand.
-
-mod compare;
-mod experiment;
-mod flags;
-mod info;
-mod render;
-mod run;
-mod scene;
-mod stats;
+//! The `tempera` command-line renderer: one module per subcommand (in the `tempera_cli`
+//! library).
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+use tempera_cli::{compare, experiment, info, render};
 
 #[derive(Parser)]
 #[command(name = "tempera", version, about = "Physically based rendering with tempered Markov-chain light transport")]

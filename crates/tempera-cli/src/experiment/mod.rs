@@ -7,7 +7,7 @@
 //! describes the same run (method, scene, resolution, times, reference), so an interrupted
 //! experiment resumes where it stopped. References are cached the same way.
 
-mod config;
+pub mod config;
 mod plot;
 mod reference;
 mod report;
