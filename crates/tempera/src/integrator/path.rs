@@ -171,15 +171,7 @@ impl PathIntegrator {
                 }
             }
             let Some(it) = hit else {
-                for &i in &scene.infinite_lights {
-                    let light = &scene.lights[i as usize];
-                    let w = if prev.specular || !self.next_event {
-                        1.0
-                    } else {
-                        power_heuristic(prev.bsdf_pdf, scene.light_sampler.pmf(i as usize) * light.pdf_li_dir(ray.d))
-                    };
-                    l += beta * light.le(ray.d) * w;
-                }
+                self.add_escaped(scene, ray.d, &prev, beta, &mut l);
                 break;
             };
             if scene.is_interface(&it) {
@@ -216,24 +208,52 @@ impl PathIntegrator {
                         rays,
                     );
             }
-            let uc = sampler.next_1d();
-            let u = sampler.next_2d();
-            let Some(bs) = bsdf.sample(it.wo, uc, u, TransportMode::Radiance) else {
+            let Some((wi, next)) = Self::sample_bsdf(&it, &bsdf, sampler, &mut beta) else {
                 break;
             };
-            beta *= bs.f * (bs.wi.dot(bsdf.frame.n).abs() / bs.pdf);
-            if !beta.is_finite() || beta.max_element() <= 0.0 {
-                break;
-            }
-            let bsdf_pdf = if bs.proportional { bsdf.pdf(it.wo, bs.wi) } else { bs.pdf };
-            prev = PrevVertex { p: it.surface.p, bsdf_pdf, specular: bs.delta };
-            medium = scene.medium_after(&it, bs.wi, medium);
-            ray = spawn_ray(it.surface.p, it.surface.ng, bs.wi);
+            prev = next;
+            medium = scene.medium_after(&it, wi, medium);
+            ray = spawn_ray(it.surface.p, it.surface.ng, wi);
             if !self.roulette(&mut beta, depth, sampler) {
                 break;
             }
         }
         l
+    }
+
+    /// Adds the environment lights seen along `d` by a path that escaped, MIS-weighted against
+    /// having sampled them from the previous vertex (which next-event estimation did only when
+    /// it is on and that vertex was not specular).
+    fn add_escaped(&self, scene: &Scene, d: Vec3, prev: &PrevVertex, beta: Rgb, l: &mut Rgb) {
+        for &i in &scene.infinite_lights {
+            let light = &scene.lights[i as usize];
+            let w = if prev.specular || !self.next_event {
+                1.0
+            } else {
+                power_heuristic(prev.bsdf_pdf, scene.light_sampler.pmf(i as usize) * light.pdf_li_dir(d))
+            };
+            *l += beta * light.le(d) * w;
+        }
+    }
+
+    /// Samples the BSDF to continue the path: multiplies `beta` by the sample's weight and
+    /// returns the new direction with what MIS needs of this vertex, or `None` when the path
+    /// ends (no sample, or no throughput left).
+    fn sample_bsdf<S: Sampler>(
+        it: &Interaction,
+        bsdf: &SurfaceBsdf,
+        sampler: &mut S,
+        beta: &mut Rgb,
+    ) -> Option<(Vec3, PrevVertex)> {
+        let uc = sampler.next_1d();
+        let u = sampler.next_2d();
+        let bs = bsdf.sample(it.wo, uc, u, TransportMode::Radiance)?;
+        *beta *= bs.f * (bs.wi.dot(bsdf.frame.n).abs() / bs.pdf);
+        if !beta.is_finite() || beta.max_element() <= 0.0 {
+            return None;
+        }
+        let bsdf_pdf = if bs.proportional { bsdf.pdf(it.wo, bs.wi) } else { bs.pdf };
+        Some((bs.wi, PrevVertex { p: it.surface.p, bsdf_pdf, specular: bs.delta }))
     }
 
     /// Russian roulette after [`RR_DEPTH`] bounces: false when the path ends, else the
@@ -293,16 +313,7 @@ impl PixelEstimator for PathIntegrator {
                 *rays += 1;
             }
             let Some(it) = scene.intersect(&ray) else {
-                for &i in &scene.infinite_lights {
-                    let light = &scene.lights[i as usize];
-                    let le = light.le(ray.d);
-                    let w = if prev.specular {
-                        1.0
-                    } else {
-                        power_heuristic(prev.bsdf_pdf, scene.light_sampler.pmf(i as usize) * light.pdf_li_dir(ray.d))
-                    };
-                    l += beta * le * w;
-                }
+                self.add_escaped(scene, ray.d, &prev, beta, &mut l);
                 break;
             };
             if let Some((le, w)) = self.emission(scene, &it, &prev) {
@@ -316,24 +327,13 @@ impl PixelEstimator for PathIntegrator {
             if self.next_event && !bsdf.is_delta() {
                 l += beta * self.sample_light(scene, &it, &bsdf, sampler, rays);
             }
-            let uc = sampler.next_1d();
-            let u = sampler.next_2d();
-            let Some(bs) = bsdf.sample(it.wo, uc, u, TransportMode::Radiance) else {
+            let Some((wi, next)) = Self::sample_bsdf(&it, &bsdf, sampler, &mut beta) else {
                 break;
             };
-            beta *= bs.f * (bs.wi.dot(bsdf.frame.n).abs() / bs.pdf);
-            if !beta.is_finite() || beta.max_element() <= 0.0 {
+            prev = next;
+            ray = spawn_ray(it.surface.p, it.surface.ng, wi);
+            if !self.roulette(&mut beta, depth, sampler) {
                 break;
-            }
-            let bsdf_pdf = if bs.proportional { bsdf.pdf(it.wo, bs.wi) } else { bs.pdf };
-            prev = PrevVertex { p: it.surface.p, bsdf_pdf, specular: bs.delta };
-            ray = spawn_ray(it.surface.p, it.surface.ng, bs.wi);
-            if depth > RR_DEPTH {
-                let q = (1.0 - beta.max_element()).max(0.0);
-                if sampler.next_1d() < q {
-                    break;
-                }
-                beta /= 1.0 - q;
             }
         }
         l

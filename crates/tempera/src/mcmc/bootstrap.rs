@@ -131,28 +131,23 @@ impl Bootstrap {
         }
         let value_folds: Vec<Moments> = (0..folds.len()).map(|f| self.fold_moments(f, folds.len())).collect();
         let all_values = self.moments();
+        let others = |all: &Moments, fold: &Moments| Moments {
+            sum: all.sum - fold.sum,
+            sum2: all.sum2 - fold.sum2,
+            n: all.n - fold.n,
+        };
         let mut mean = 0.0;
-        for (f, (norm, values)) in folds.iter().zip(&value_folds).enumerate() {
-            let others = |all: &Moments, fold: &Moments| Moments {
-                sum: all.sum - fold.sum,
-                sum2: all.sum2 - fold.sum2,
-                n: all.n - fold.n,
-            };
+        for (norm, values) in folds.iter().zip(&value_folds) {
             let mut estimate = *values;
             estimate.merge(large);
             let (ma, mb) = (norm.mean_and_rel_se().0, estimate.mean_and_rel_se().0);
             let wa = precision(&others(&normaliser, norm), norm.n);
-            let wb = precision(&others(&all_values, &value_folds[f]), estimate.n);
-            let combined = if wa.is_infinite() || wb.is_infinite() {
-                match (wa.is_infinite(), wb.is_infinite()) {
-                    (true, false) => ma,
-                    (false, true) => mb,
-                    _ => 0.5 * (ma + mb),
-                }
-            } else if wa + wb > 0.0 {
-                (ma * wa + mb * wb) / (wa + wb)
-            } else {
-                0.5 * (ma + mb)
+            let wb = precision(&others(&all_values, values), estimate.n);
+            let combined = match (wa.is_infinite(), wb.is_infinite()) {
+                (true, false) => ma,
+                (false, true) => mb,
+                (false, false) if wa + wb > 0.0 => (ma * wa + mb * wb) / (wa + wb),
+                _ => 0.5 * (ma + mb),
             };
             mean += combined / folds.len() as f64;
         }
