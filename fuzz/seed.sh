@@ -4,7 +4,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 corpus="$root/fuzz/corpus"
-mkdir -p "$corpus"/{pbrt,mitsuba,ply,serialized,image,experiment}
+mkdir -p "$corpus"/{pbrt,mitsuba,ply,obj,serialized,image,experiment}
 fixtures="$root/crates/tempera-scene/tests/fixtures"
 shared="$root/../shared/scenes"
 copy() { # target, files...
@@ -19,11 +19,13 @@ copy pbrt "$fixtures"/pbrt/*.pbrt
 copy mitsuba "$fixtures"/mitsuba/*.xml
 copy ply $(find "$fixtures" -name '*.ply')
 copy serialized $(find "$fixtures" -name '*.serialized')
+copy obj $(find "$fixtures" -name '*.obj')
 if [ -d "$shared" ]; then
   copy pbrt $(find "$shared" -name '*.pbrt')
   copy mitsuba $(find "$shared" -name 'scene_v0.6.xml')
   copy ply $(find "$shared" -name '*.ply' -size -64k | head -20)
   copy serialized $(find "$shared" -name '*.serialized' -size -64k | head -5)
+  copy obj $(find "$shared" -name '*.obj' -size -64k | head -10)
 fi
 copy experiment "$root"/experiments/*.toml
 # Images: the first byte picks the reader (0 PFM, 1 EXR, 2 PNG, 3 TGA, 4 JPEG).

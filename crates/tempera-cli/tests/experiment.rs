@@ -290,8 +290,62 @@ fn an_experiment_killed_at_any_moment_loses_nothing_finished() {
             assert!(img.is_ok(), "{name} does not read: {:?}", img.err());
         }
     }
+    assert!(partials(&dir).is_empty(), "temporary files are gone: {:?}", partials(&dir));
     let rows = |d: &Path| std::fs::read_to_string(d.join("out/results.csv")).unwrap().lines().count();
     assert_eq!(rows(&dir), rows(&whole), "every run is in the results");
     let reference = |d: &Path| std::fs::read(d.join("out/reference/default.exr")).unwrap();
     assert!(reference(&dir) == reference(&whole), "the reference is an uninterrupted run's");
+}
+
+/// Names of the temporary files of interrupted writes under `dir`.
+fn partials(dir: &Path) -> Vec<PathBuf> {
+    files(dir).into_iter().filter(|f| f.to_string_lossy().contains(".partial-")).collect()
+}
+
+/// A folder that cannot be created and a full disk (simulated with a file-size limit, so the
+/// writes fail with EFBIG as they would with ENOSPC) are errors naming the path; the finished
+/// runs stay as they were, no temporary file is left, and a later run finishes the rest.
+/// Temporary files a killed process left are removed when the experiment starts again.
+#[cfg(unix)]
+#[test]
+fn unwritable_folders_and_a_full_disk_are_clear_errors_that_keep_finished_runs() {
+    let dir = scratch("full");
+    assert!(run(&dir, &TINY.replace("seeds = [1, 2]", "seeds = [1]")).status.success());
+    let finished = ["out/runs/default/bdpt/seed-1.json", "out/runs/default/mmlt/seed-1.json"];
+    let kept = || finished.map(|f| std::fs::read(dir.join(f)).unwrap());
+    let before = kept();
+    let second = dir.join("out/runs/default/bdpt/seed-2.json");
+
+    // A file where the images folder should be.
+    std::fs::rename(dir.join("out/images"), dir.join("images-saved")).unwrap();
+    std::fs::write(dir.join("out/images"), b"not a folder").unwrap();
+    let out = run(&dir, TINY);
+    let log = stderr(&out);
+    assert!(!out.status.success(), "{log}");
+    assert!(log.contains("cannot create the folder") && log.contains("out/images/default/bdpt"), "{log}");
+    assert!(kept() == before && !second.exists(), "finished runs are kept");
+    std::fs::remove_file(dir.join("out/images")).unwrap();
+    std::fs::rename(dir.join("images-saved"), dir.join("out/images")).unwrap();
+
+    // Files may grow to 6 KiB: the next run's 7-KB EXR does not fit.
+    let out = Command::new("bash")
+        .current_dir(&dir)
+        .arg("-c")
+        .arg(format!("trap '' XFSZ; ulimit -f 6; exec '{}' experiment tiny.toml -q", env!("CARGO_BIN_EXE_tempera")))
+        .output()
+        .unwrap();
+    let log = stderr(&out);
+    assert!(!out.status.success(), "{log}");
+    assert!(log.contains("File too large") && log.contains("out/images/default/bdpt/seed-2"), "{log}");
+    assert!(kept() == before && !second.exists(), "finished runs are kept");
+    assert!(partials(&dir).is_empty(), "{:?}", partials(&dir));
+
+    // What a `kill -9` between writing and renaming leaves (a process id that cannot run).
+    let stale = dir.join("out/images/default/.seed-2-0.4s.exr.partial-4294967294.exr");
+    std::fs::write(&stale, b"half an image").unwrap();
+    let out = run(&dir, TINY);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("removed 1 temporary file"), "{}", stderr(&out));
+    assert!(kept() == before && second.exists());
+    assert!(partials(&dir).is_empty(), "{:?}", partials(&dir));
 }

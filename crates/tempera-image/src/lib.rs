@@ -77,6 +77,42 @@ fn partial_path(path: &Path) -> std::path::PathBuf {
     path.with_file_name(format!(".{name}.partial-{}{ext}", std::process::id()))
 }
 
+/// The process id in a name `partial_path` made, if `name` is one.
+fn partial_owner(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix('.')?;
+    let (_, after) = rest.rsplit_once(".partial-")?;
+    let digits: String = after.chars().take_while(char::is_ascii_digit).collect();
+    digits.parse().ok()
+}
+
+/// Whether process `pid` is running (where that cannot be known, only this process counts).
+fn process_alive(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    cfg!(target_os = "linux") && Path::new("/proc").join(pid.to_string()).exists()
+}
+
+/// Removes, under `dir` (recursively), the temporary files that writes of processes no
+/// longer running left behind (a `kill -9` between writing and renaming); returns how many.
+/// Files of running processes are left alone.
+pub fn remove_stale_partials(dir: &Path) -> usize {
+    let mut removed = 0;
+    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let path = entry.path();
+        let Ok(kind) = entry.file_type() else { continue };
+        if kind.is_dir() {
+            removed += remove_stale_partials(&path);
+        } else if let Some(pid) = partial_owner(&entry.file_name().to_string_lossy())
+            && !process_alive(pid)
+            && std::fs::remove_file(&path).is_ok()
+        {
+            removed += 1;
+        }
+    }
+    removed
+}
+
 /// Writes `contents` to `path` through a temporary sibling renamed into place, so that a
 /// process killed at any moment leaves either the old file or the new one, never a part.
 pub fn write_file_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
@@ -287,6 +323,26 @@ mod tests {
         let missing = dir.join("no-such-folder").join("b.exr");
         let e = write_image(&missing, &sample_image(), &WriteOptions::default()).unwrap_err().to_string();
         assert!(e.contains("no-such-folder/b.exr") && !e.contains("partial"), "{e}");
+    }
+
+    /// Temporary files of dead processes go; those of running ones and ordinary files stay.
+    #[test]
+    fn stale_partial_files_are_removed() {
+        let dir = std::env::temp_dir().join(format!("tempera-stale-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        let own = format!(".a.exr.partial-{}.exr", std::process::id());
+        let names =
+            [".b.json.partial-4294967294.json", "sub/.c.png.partial-4294967293.png", &own, "d.exr", "e.partial-1"];
+        for name in names {
+            std::fs::write(dir.join(name), b"x").unwrap();
+        }
+        assert_eq!(partial_owner(".x.partial-12.exr"), Some(12));
+        assert_eq!(partial_owner("x.partial-12.exr"), None, "only hidden files");
+        assert_eq!(remove_stale_partials(&dir), 2);
+        assert!(!dir.join(names[0]).exists() && !dir.join(names[1]).exists());
+        assert!(names[2..].iter().all(|n| dir.join(n).exists()));
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// Inputs found by fuzzing (`fuzz/`): each is an error naming the file, not an abort.

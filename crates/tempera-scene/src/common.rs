@@ -1,7 +1,7 @@
 //! Geometry helpers shared by the loaders: analytic spheres and disks where the transform
 //! allows (a similarity), and parametric grid meshes for shapes built from triangles.
 
-use tempera::geometry::{Disk, Shape, Sphere, TriangleMesh};
+use tempera::geometry::{Disk, MeshError, Shape, Sphere, TriangleMesh};
 use tempera::math::{Mat4, Vec2, Vec3};
 
 /// For a similarity transform (rotation, uniform scale, translation, possibly mirrored), its
@@ -40,8 +40,9 @@ pub fn analytic_disk(to_world: &Mat4, center: Vec3, radius: f32, reverse: bool) 
     Some(Shape::Disk(disk))
 }
 
-/// A grid mesh over `(u, v) ∈ [0,1]²` mapped through `f` to a position and normal.
-pub fn grid(nu: u32, nv: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> TriangleMesh {
+/// A grid mesh over `(u, v) ∈ [0,1]²` mapped through `f` to a position and normal; an error
+/// when a parameter made a position non-finite.
+pub fn grid(nu: u32, nv: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> Result<TriangleMesh, MeshError> {
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut uvs = Vec::new();
@@ -63,5 +64,5 @@ pub fn grid(nu: u32, nv: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> TriangleM
             indices.push([a, b + 1, b]);
         }
     }
-    TriangleMesh::new(positions, indices, Some(normals), Some(uvs)).expect("grid indices are in range")
+    TriangleMesh::new(positions, indices, Some(normals), Some(uvs))
 }

@@ -6,6 +6,7 @@ mod common;
 mod context;
 pub mod diagnostics;
 mod mitsuba;
+pub mod obj;
 mod pbrt;
 pub mod ply;
 pub mod serialized;

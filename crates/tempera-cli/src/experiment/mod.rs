@@ -32,10 +32,21 @@ pub struct ExperimentArgs {
     pub quiet: bool,
 }
 
+/// Creates `folder` (and its parents), naming it in the error.
+pub(crate) fn create_folder(folder: &std::path::Path) -> Result<()> {
+    std::fs::create_dir_all(folder).with_context(|| format!("cannot create the folder {}", folder.display()))
+}
+
 pub fn run(args: ExperimentArgs) -> Result<()> {
     let config = Config::load(&args.config)?;
-    std::fs::create_dir_all(&config.output)
-        .with_context(|| format!("cannot create the output folder {}", config.output.display()))?;
+    create_folder(&config.output)?;
+    let stale = tempera_image::remove_stale_partials(&config.output);
+    if stale > 0 {
+        eprintln!(
+            "removed {stale} temporary file(s) that an interrupted experiment left in {}",
+            config.output.display()
+        );
+    }
     crate::run::install_interrupt_handler();
     let scenes = scenes::prepare_scenes(&config)?;
     let mut records = Vec::new();

@@ -114,7 +114,7 @@ pub fn obtain(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Ref
         None => render(config, scene, quiet)?,
     };
     let (_, _, png) = paths(config, scene);
-    std::fs::create_dir_all(png.parent().expect("reference paths have a folder"))?;
+    super::create_folder(png.parent().expect("reference paths have a folder"))?;
     write_image(&png, &reference.image, &WriteOptions::default())?;
     Ok(reference)
 }
@@ -143,7 +143,7 @@ fn render(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Referen
     }
     eprintln!("scene '{}': reference rendered in {:.1} s", scene.entry.name, out.stats.seconds);
     let (exr, json, _) = paths(config, scene);
-    std::fs::create_dir_all(exr.parent().expect("reference paths have a folder"))?;
+    super::create_folder(exr.parent().expect("reference paths have a folder"))?;
     write_image(&exr, &out.image, &WriteOptions::default())?;
     let key = key(config, scene);
     tempera_image::write_file_atomically(&json, serde_json::to_string_pretty(&key).expect("keys serialise").as_bytes())

@@ -247,7 +247,7 @@ fn spread(
     }
     let map_name = format!("spread/{scene}/{method}-variance.png");
     let path: PathBuf = config.output.join(&map_name);
-    std::fs::create_dir_all(path.parent().expect("a folder"))?;
+    super::create_folder(path.parent().expect("a folder"))?;
     write_image(&path, &value_map(&relvar, reference.width, reference.height), &WriteOptions::default())?;
     let c = super::plot::colour(index);
     Ok(Some(SpreadRow {

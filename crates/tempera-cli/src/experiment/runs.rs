@@ -126,7 +126,7 @@ impl Job<'_> {
         let record = self.render(&label, quiet)?;
         if let Some(record) = &record {
             let path = self.record_path();
-            std::fs::create_dir_all(path.parent().expect("record paths have a folder"))?;
+            super::create_folder(path.parent().expect("record paths have a folder"))?;
             let text = serde_json::to_string_pretty(record).expect("records serialise");
             tempera_image::write_file_atomically(&path, text.as_bytes())
                 .with_context(|| format!("cannot write {}", path.display()))?;
@@ -203,7 +203,7 @@ impl Job<'_> {
     fn write_images(&self, time: f64, out: &RenderOutput) -> Result<String> {
         let stem = image_stem(&self.scene.entry.name, &self.method.method.name, self.seed, time);
         let base = self.config.output.join(&stem);
-        std::fs::create_dir_all(base.parent().expect("image paths have a folder"))?;
+        super::create_folder(base.parent().expect("image paths have a folder"))?;
         let options = WriteOptions::default();
         let with = |suffix: &str| PathBuf::from(format!("{}{suffix}", base.display()));
         write_image(&with(".exr"), &out.image, &options)?;

@@ -8,7 +8,6 @@ use super::{Ctx, Loader};
 use crate::LoadError;
 use crate::common::{analytic_disk, analytic_sphere, grid};
 use roxmltree::Node;
-use std::io::BufReader;
 use tempera::geometry::{Shape, TriangleMesh};
 use tempera::math::frame::Frame;
 use tempera::math::{Mat4, Rgb, Vec2, Vec3};
@@ -61,32 +60,13 @@ fn flip_v(uvs: Option<Vec<Vec2>>) -> Option<Vec<Vec2>> {
 impl Loader {
     fn obj(&mut self, ctx: &Ctx, props: &Props, file: &str) -> Result<TriangleMesh, LoadError> {
         let path = ctx.resolve(file);
-        let f = std::fs::File::open(&path)
-            .map_err(|e| ctx.err(&props.loc, format!("cannot read {}: {e}", path.display())))?;
-        let options =
-            tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
-        let (models, _) =
-            tobj::load_obj_buf(&mut BufReader::new(f), &options, |_| Err(tobj::LoadError::OpenFileFailed))
-                .map_err(|e| ctx.err(&props.loc, format!("{}: {e}", path.display())))?;
+        let bytes =
+            std::fs::read(&path).map_err(|e| ctx.err(&props.loc, format!("cannot read {}: {e}", path.display())))?;
+        let m = crate::obj::parse(&bytes).map_err(|e| ctx.err(&props.loc, format!("{}: {e}", path.display())))?;
         let flip = props.bool(ctx, "flipTexCoords", true)?;
-        let (mut p, mut n, mut uv, mut idx) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        let all_normals = models.iter().all(|m| m.mesh.normals.len() == m.mesh.positions.len());
-        let all_uvs = models.iter().all(|m| m.mesh.texcoords.len() * 3 == m.mesh.positions.len() * 2);
-        for m in &models {
-            let base = p.len() as u32;
-            let mm = &m.mesh;
-            p.extend(mm.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])));
-            if all_normals {
-                n.extend(mm.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])));
-            }
-            if all_uvs {
-                uv.extend(mm.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], if flip { c[1] } else { 1.0 - c[1] })));
-            }
-            idx.extend(mm.indices.chunks_exact(3).map(|c| [base + c[0], base + c[1], base + c[2]]));
-        }
-        let normals = (all_normals && !n.is_empty()).then_some(n);
-        let uvs = (all_uvs && !uv.is_empty()).then_some(uv);
-        TriangleMesh::new(p, idx, normals, uvs).map_err(|e| ctx.err(&props.loc, format!("{}: {e}", path.display())))
+        let uvs = m.uvs.map(|uv| uv.into_iter().map(|t| Vec2::new(t.x, if flip { t.y } else { 1.0 - t.y })).collect());
+        TriangleMesh::new(m.positions, m.indices, m.normals, uvs)
+            .map_err(|e| ctx.err(&props.loc, format!("{}: {e}", path.display())))
     }
 
     fn file_mesh(&mut self, ctx: &Ctx, props: &Props, ty: &str) -> Result<TriangleMesh, LoadError> {
@@ -136,8 +116,8 @@ impl Loader {
             "sphere" => {
                 let center = props.vec3(ctx, "center")?.unwrap_or(Vec3::ZERO);
                 let radius = props.float(ctx, "radius", 1.0)? as f32;
-                if radius <= 0.0 {
-                    return Err(ctx.err(&props.loc, "sphere radius must be positive"));
+                if !radius.is_finite() || radius <= 0.0 {
+                    return Err(ctx.err(&props.loc, "sphere radius must be positive and finite"));
                 }
                 if let Some(sphere) = analytic_sphere(&to_world, center, radius, flip) {
                     return Ok(Some(sphere));
@@ -147,6 +127,7 @@ impl Loader {
                     let n = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
                     (center + n * radius, n)
                 })
+                .map_err(|e| ctx.err(&props.loc, format!("{ty}: {e}")))?
             }
             "disk" => {
                 if let Some(disk) = analytic_disk(&to_world, Vec3::ZERO, 1.0, flip) {
@@ -156,6 +137,7 @@ impl Loader {
                     let (phi, r) = (u * std::f32::consts::TAU, 1.0 - v);
                     (Vec3::new(r * phi.cos(), r * phi.sin(), 0.0), Vec3::Z)
                 })
+                .map_err(|e| ctx.err(&props.loc, format!("{ty}: {e}")))?
             }
             "cylinder" => {
                 let p0 = props.vec3(ctx, "p0")?.unwrap_or(Vec3::ZERO);
@@ -169,6 +151,7 @@ impl Loader {
                     let n = f.s * phi.cos() + f.t * phi.sin();
                     (p0 + axis * v + n * r, n)
                 })
+                .map_err(|e| ctx.err(&props.loc, format!("{ty}: {e}")))?
             }
             "hair" | "heightfield" => {
                 let unused = props.unused();

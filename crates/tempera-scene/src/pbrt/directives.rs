@@ -518,15 +518,15 @@ impl Loader {
     }
 
     fn instance(&mut self, name: &str, at: &Loc) -> Result<(), LoadError> {
-        let Some(prototype) = self.named.objects.get(name).copied() else {
-            return Err(LoadError::Syntax { loc: at.clone(), message: format!("unknown object \"{name}\"") });
-        };
         if self.object.is_some() {
             return Err(LoadError::Syntax {
                 loc: at.clone(),
                 message: "ObjectInstance inside ObjectBegin is not supported".into(),
             });
         }
+        let Some(prototype) = self.named.objects.get(name).copied() else {
+            return Err(LoadError::Syntax { loc: at.clone(), message: format!("unknown object \"{name}\"") });
+        };
         self.cx.info.instances += 1;
         if let Some(prototype) = prototype {
             let m = self.state.ctm;

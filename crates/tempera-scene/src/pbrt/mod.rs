@@ -155,15 +155,15 @@ fn finish(mut loader: Loader) -> Result<LoadedScene, LoadError> {
         let medium = loader.medium_index(&name, &at)?;
         loader.cx.builder.set_camera_medium(medium);
     }
-    if let Some((_, block, loc)) = loader.stack.last() {
-        let what = if *block == Block::Attribute { "AttributeBegin" } else { "TransformBegin" };
-        return Err(LoadError::Syntax { loc: loc.clone(), message: format!("{what} without a matching end") });
-    }
     if let Some((name, _, loc)) = &loader.object {
         return Err(LoadError::Syntax {
             loc: loc.clone(),
             message: format!("ObjectBegin \"{name}\" without ObjectEnd"),
         });
+    }
+    if let Some((_, block, loc)) = loader.stack.last() {
+        let what = if *block == Block::Attribute { "AttributeBegin" } else { "TransformBegin" };
+        return Err(LoadError::Syntax { loc: loc.clone(), message: format!("{what} without a matching end") });
     }
     Ok(loader.cx.finish())
 }

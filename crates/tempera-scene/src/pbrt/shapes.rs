@@ -10,7 +10,7 @@ use crate::LoadError;
 use crate::common::{analytic_disk, analytic_sphere, grid};
 use crate::diagnostics::Loc;
 use std::f32::consts::TAU;
-use tempera::geometry::{Shape, TriangleMesh};
+use tempera::geometry::{MeshError, Shape, TriangleMesh};
 use tempera::math::{Vec2, Vec3};
 
 /// Segments around the axis of tessellated quadrics.
@@ -25,7 +25,7 @@ fn vec3s(v: Vec<Vec<f64>>) -> Vec<Vec3> {
     v.into_iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect()
 }
 
-fn sphere_mesh(radius: f32, zmin: f32, zmax: f32, phi_max: f32) -> TriangleMesh {
+fn sphere_mesh(radius: f32, zmin: f32, zmax: f32, phi_max: f32) -> Result<TriangleMesh, MeshError> {
     let (t0, t1) = ((zmin / radius).clamp(-1.0, 1.0).acos(), (zmax / radius).clamp(-1.0, 1.0).acos());
     grid(SEGMENTS, RINGS, |u, v| {
         let (phi, theta) = (u * phi_max, t0 + (t1 - t0) * v);
@@ -34,14 +34,14 @@ fn sphere_mesh(radius: f32, zmin: f32, zmax: f32, phi_max: f32) -> TriangleMesh 
     })
 }
 
-fn disk_mesh(height: f32, radius: f32, inner: f32, phi_max: f32) -> TriangleMesh {
+fn disk_mesh(height: f32, radius: f32, inner: f32, phi_max: f32) -> Result<TriangleMesh, MeshError> {
     grid(SEGMENTS, 4, |u, v| {
         let (phi, r) = (u * phi_max, radius + (inner - radius) * v);
         (Vec3::new(r * phi.cos(), r * phi.sin(), height), Vec3::Z)
     })
 }
 
-fn cylinder_mesh(radius: f32, zmin: f32, zmax: f32, phi_max: f32) -> TriangleMesh {
+fn cylinder_mesh(radius: f32, zmin: f32, zmax: f32, phi_max: f32) -> Result<TriangleMesh, MeshError> {
     grid(SEGMENTS, 1, |u, v| {
         let phi = u * phi_max;
         let n = Vec3::new(phi.cos(), phi.sin(), 0.0);
@@ -135,8 +135,8 @@ impl Loader {
 
     fn quadric(&mut self, ty: &str, params: &ParamSet, at: &Loc) -> Result<Shape, LoadError> {
         let radius = params.float("radius", 1.0)? as f32;
-        if radius.is_nan() || radius <= 0.0 {
-            return Err(syntax(at, format!("{ty} radius must be positive, got {radius}")));
+        if !radius.is_finite() || radius <= 0.0 {
+            return Err(syntax(at, format!("{ty} radius must be positive and finite, got {radius}")));
         }
         let phi_max = (params.float("phimax", 360.0)? as f32).clamp(0.0, 360.0).to_radians();
         let ctm = self.state.ctm;
@@ -171,7 +171,7 @@ impl Loader {
                 cylinder_mesh(radius, zmin.min(zmax), zmin.max(zmax), phi_max)
             }
         };
-        Ok(self.mesh(mesh))
+        Ok(self.mesh(mesh.map_err(|e| syntax(at, format!("{ty}: {e}")))?))
     }
 
     pub(super) fn shape_directive(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {

@@ -19,6 +19,28 @@ impl obvhs::Boundable for Bounds {
     }
 }
 
+/// Stack for the tree's build: its conversion to the wide tree recurses once per level, and
+/// primitives with identical bounds (coincident copies, shapes scaled to a point) make a
+/// chain as deep as their count.
+fn build_stack_bytes(primitives: usize) -> usize {
+    (32 << 20) + primitives.saturating_mul(2 << 10)
+}
+
+/// Builds the wide tree on a thread whose stack fits the deepest tree `bounds` can make (the
+/// stack is address space, taken only as deep as the recursion goes), or here when no such
+/// thread can be made.
+fn build_tree(bounds: &[Bounds]) -> CwBvh {
+    let build =
+        || obvhs::cwbvh::builder::build_cwbvh(bounds, obvhs::BvhBuildParams::medium_build(), &mut Duration::default());
+    std::thread::scope(|scope| {
+        let thread = std::thread::Builder::new().name("bvh-build".into()).stack_size(build_stack_bytes(bounds.len()));
+        match thread.spawn_scoped(scope, build) {
+            Ok(handle) => handle.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+            Err(_) => build(),
+        }
+    })
+}
+
 /// The default accelerator.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
@@ -39,11 +61,7 @@ impl Bvh {
                 Bounds(Aabb::new((lo - Vec3::splat(pad)).into(), (hi + Vec3::splat(pad)).into()))
             })
             .collect();
-        let mut tree = obvhs::cwbvh::builder::build_cwbvh(
-            &bounds,
-            obvhs::BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
+        let mut tree = build_tree(&bounds);
         geometry.reorder(&tree.primitive_indices);
         for (i, idx) in tree.primitive_indices.iter_mut().enumerate() {
             *idx = i as u32;
@@ -161,6 +179,25 @@ mod tests {
             assert!(bvh.intersect(&g, &ray, f32::INFINITY).is_some(), "direction {d:?}");
             assert!(bvh.occluded(&g, &ray, f32::INFINITY), "direction {d:?}");
         }
+    }
+
+    /// Triangles collapsed to one point (a tessellated sphere of radius 1e-39 in a scene file)
+    /// have identical, empty bounds; the build then makes a chain as deep as their count, which
+    /// overflowed the stack of the thread that built it (an abort). 12,000 of them, and one
+    /// ordinary triangle behind them that rays must still find.
+    #[test]
+    fn triangles_collapsed_to_a_point_build_without_overflowing_the_stack() {
+        let count = 12_000u32;
+        let mut positions = vec![Vec3::new(1.0, 0.5, 0.0); 3 * count as usize];
+        let mut indices: Vec<[u32; 3]> = (0..count).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        positions.extend([Vec3::new(0.0, 0.0, -1.0), Vec3::new(2.0, 0.0, -1.0), Vec3::new(0.0, 2.0, -1.0)]);
+        indices.push([3 * count, 3 * count + 1, 3 * count + 2]);
+        let mut g = Geometry::new(vec![Shape::Mesh(TriangleMesh::new(positions, indices, None, None).unwrap())]);
+        let bvh = Bvh::build(&mut g);
+        let ray = Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z);
+        assert!((bvh.intersect(&g, &ray, f32::INFINITY).expect("a hit").t - 2.0).abs() < 1e-6);
+        assert!(bvh.occluded(&g, &ray, f32::INFINITY));
+        assert!(!bvh.occluded(&g, &Ray::new(Vec3::new(3.0, 3.0, 1.0), -Vec3::Z), f32::INFINITY));
     }
 
     #[test]
