@@ -30,6 +30,10 @@ pub struct ExperimentArgs {
     /// No progress bars.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Ctrl-C stops the experiment through a signal handler installed here (callers that
+    /// watch for it themselves, such as the Python module, set `run::CANCEL` instead).
+    #[arg(skip = true)]
+    pub handle_interrupts: bool,
 }
 
 /// Creates `folder` (and its parents), naming it in the error.
@@ -47,7 +51,9 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
             config.output.display()
         );
     }
-    crate::run::install_interrupt_handler();
+    if args.handle_interrupts {
+        crate::run::install_interrupt_handler();
+    }
     let scenes = scenes::prepare_scenes(&config)?;
     let mut records = Vec::new();
     let mut references = Vec::new();
