@@ -110,6 +110,10 @@ fn run_watched<T: Send>(
         })
     });
     if let Some(bar) = &bar {
+        let done = progress();
+        if done > shown {
+            let _ = bar.call_method1(py, "update", (done - shown,));
+        }
         let _ = bar.call_method0(py, "close");
     }
     let value = value.map_err(|_| PyRuntimeError::new_err("the render panicked (a bug; please report it)"))?;

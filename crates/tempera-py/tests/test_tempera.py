@@ -104,9 +104,15 @@ def test_compare_error_map_save_and_read_take_numpy_arrays(tmp_path):
     reference = rng.uniform(0.2, 1.0, size=(12, 16, 3))
     image = reference * 1.1
     c = tempera.compare(image, reference)
-    assert c["mean_ratio"] == pytest.approx(1.1, rel=1e-4)
-    # relMSE = mean of (x − r)² / (r² + ε): about 0.1² here.
-    assert c["relmse"] == pytest.approx(0.01, rel=0.05)
+    # By hand, in float32 as the renderer stores images: luminance-based relMSE with ε = 0.01.
+    x, r = image.astype(np.float32).astype(np.float64), reference.astype(np.float32).astype(np.float64)
+    lum = lambda a: a @ np.array([0.2126, 0.7152, 0.0722])  # noqa: E731
+    assert c["mse"] == pytest.approx(((x - r) ** 2).mean(), rel=1e-6)
+    assert c["rmse"] == pytest.approx(np.sqrt(((x - r) ** 2).mean()), rel=1e-6)
+    assert c["relmse"] == pytest.approx(((lum(x) - lum(r)) ** 2 / (lum(r) ** 2 + 0.01)).mean(), rel=1e-5)
+    assert c["smape"] == pytest.approx((abs(x - r) / (abs(x) + abs(r) + 0.01)).mean(), rel=1e-6)
+    assert c["mean_ratio"] == pytest.approx(lum(x).sum() / lum(r).sum(), rel=1e-6)
+    assert tempera.compare(reference, reference)["flip"] == 0.0 and 0.0 < c["flip"] < 0.2
     assert set(tempera.compare(image, reference, metrics=("relmse", "flip"))) == {"relmse", "flip"}
     relmse = tempera.error_map(image, reference)
     assert relmse.shape == (12, 16) and relmse.mean() == pytest.approx(c["relmse"], rel=1e-5)
@@ -196,3 +202,24 @@ def test_ctrl_c_returns_the_image_so_far():
     assert child.returncode == 0, out
     words = out.split()
     assert words[:2] == ["interrupted", "True"] and int(words[3]) < 30 and words[5] == "True", out
+
+
+def test_an_interrupt_from_a_timer_thread_returns_a_partial_image():
+    import _thread
+
+    timer = threading.Timer(1.0, _thread.interrupt_main)
+    timer.start()
+    start = time.time()
+    result = tempera.render(tempera.default_scene(), "path", time=60, resolution=(48, 48), threads=1, progress=False)
+    timer.join()
+    assert result.interrupted and time.time() - start < 20
+    assert result.stats["cancelled"] and 0 < result.stats["samples"]
+    assert np.isfinite(result.image).all() and result.image.mean() > 0
+
+
+def test_progress_bar_with_tqdm():
+    pytest.importorskip("tqdm")
+    script = "import tempera; tempera.render(tempera.default_scene(), 'path', spp=4, resolution=(32, 32))"
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    # A bar over 32 × 32 pixels × 4 samples (cleared when done: leave=False).
+    assert "/4096" in out.stderr and "sample/s" in out.stderr, out.stderr
