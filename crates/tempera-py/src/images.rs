@@ -93,12 +93,7 @@ pub fn error_map<'py>(
     if !matches!(metric, "relmse" | "flip") {
         return Err(PyValueError::new_err(format!("unknown error map {metric:?} (expected relmse or flip)")));
     }
-    if image.width != reference.width || image.height != reference.height {
-        return Err(PyValueError::new_err(format!(
-            "image is {}x{} but reference is {}x{}",
-            image.width, image.height, reference.width, reference.height
-        )));
-    }
+    tempera_image::check_sizes(&image, &reference).map_err(PyValueError::new_err)?;
     if colour {
         let map = match metric {
             "relmse" => py.detach(|| metrics::error_map(&image, &reference)),

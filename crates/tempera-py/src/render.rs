@@ -242,14 +242,16 @@ pub fn render(
     let render_settings = RenderSettings { budget, seed, threads };
     let scene_ref = &*guard;
     let integrator_ref = integrator.as_ref();
-    let (out, interrupted) = run_watched(py, bar.as_ref(), &cancel, &shown, || {
+    let watched = run_watched(py, bar.as_ref(), &cancel, &shown, || {
         let control = RenderControl::new(&cancel, &on_progress).with_max_memory(max_memory);
         integrator_ref.render(scene_ref, &render_settings, &control)
-    })?;
+    });
+    // The scene gets its resolution back whatever became of the render.
     if resolution.is_some() {
         guard.set_resolution(original.0, original.1);
     }
     drop(guard);
+    let (out, interrupted) = watched?;
     let out = out.map_err(value_error)?;
     let stats = serde_json::to_value(RunStats::new(integrator.name(), &out)).map_err(value_error)?;
     let array = images::to_numpy(py, &out.image)?.unbind();

@@ -300,14 +300,14 @@ struct PrevVertex {
 impl PixelEstimator for PathIntegrator {
     fn li<S: Sampler>(&self, scene: &Scene, mut ray: Ray, sampler: &mut S, ctx: &mut SampleCtx) -> Rgb {
         let rays = &mut ctx.rays;
-        let mut l = Rgb::ZERO;
-        let mut beta = Rgb::ONE;
-        let mut prev = PrevVertex { p: ray.o, bsdf_pdf: 0.0, specular: true };
-        let mut depth = 0u32;
         sampler.start_stream(Stream::Camera);
         if scene.has_media() {
             return self.li_media(scene, ray, sampler, rays);
         }
+        let mut l = Rgb::ZERO;
+        let mut beta = Rgb::ONE;
+        let mut prev = PrevVertex { p: ray.o, bsdf_pdf: 0.0, specular: true };
+        let mut depth = 0u32;
         loop {
             if depth > 0 {
                 *rays += 1;
