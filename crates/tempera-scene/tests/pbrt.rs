@@ -288,7 +288,9 @@ fn homogeneous_media_load_with_their_interfaces() {
         WorldBegin\n\
         AttributeBegin\n MediumInterface \"ink\" \"fog\"\n Material \"interface\"\n Shape \"sphere\"\nAttributeEnd\n\
         AttributeBegin\n MediumInterface \"ink\" \"fog\"\n Material \"dielectric\"\n Translate 3 0 0\n Shape \"sphere\"\nAttributeEnd\n\
-        MediumInterface \"\" \"\"\nMaterial \"interface\"\n Shape \"sphere\" \"float radius\" 9\n";
+        AttributeBegin\n MediumInterface \"\" \"fog\"\n LightSource \"point\"\nAttributeEnd\n\
+        MediumInterface \"\" \"\"\nMaterial \"interface\"\n Shape \"sphere\" \"float radius\" 9\n\
+        LightSource \"point\" \"point3 from\" [0 5 0]\n";
     let loaded = load_text(text).unwrap();
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
     let scene = loaded.builder.build().unwrap();
@@ -307,6 +309,9 @@ fn homogeneous_media_load_with_their_interfaces() {
     let glass = scene.intersect(&tempera::geometry::Ray::new(Vec3::new(3.0, 0.0, 5.0), ray.d)).unwrap();
     assert!(!scene.is_interface(&glass));
     assert_eq!(scene.medium_after(&glass, -ray.d, Some(1)), Some(0), "leaving the glass enters the fog");
+    // Lights sit in the outside medium current where they are defined.
+    assert_eq!(scene.light_medium(0, Vec3::Z, Vec3::Z), Some(0), "the first light is in the fog");
+    assert_eq!(scene.light_medium(1, Vec3::Z, Vec3::Z), None, "the second one in vacuum");
 
     for (bad, expect) in [
         ("MakeNamedMedium \"a\" \"string type\" \"uniformgrid\"", "heterogeneous medium \"a\""),

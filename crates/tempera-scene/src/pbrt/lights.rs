@@ -87,7 +87,9 @@ impl Loader {
         };
         self.report_unused(&params, &format!("LightSource \"{ty}\""))?;
         *self.cx.info.lights.entry(ty).or_default() += 1;
-        self.cx.builder.add_light(light);
+        // pbrt-v4: a light sits in the current `MediumInterface`'s outside medium.
+        let medium = self.medium_index(&self.state.media.1.clone(), &at)?;
+        self.cx.builder.add_light_in(light, medium);
         Ok(())
     }
 

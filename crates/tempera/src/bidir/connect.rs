@@ -28,17 +28,19 @@ pub struct Connection {
     pub g: f32,
     /// Reverse densities around the connection that entered the MIS weight.
     pub rev: ReversePdfs,
-    /// `l` without the two connection factors: `l = base · f_light · f_camera` up to rounding.
+    /// `l` without the two connection factors: `l = base · f_light · f_camera` up to rounding
+    /// (the segment's transmittance through media is part of it).
     pub base: Rgb,
     /// The endpoint sampled anew for `s = 1` (a light vertex) or `t = 1` (a camera vertex).
     pub sampled: Option<Vertex>,
 }
 
-/// Geometric coupling `|cos θ₀| |cos θ₁| / d²` with shading normals, or 0 when occluded.
-fn geometry(scene: &Scene, a: &Vertex, b: &Vertex, rays: &mut u64) -> f32 {
+/// Geometric coupling `|cos θ₀| |cos θ₁| / d²` with shading normals (zero when nothing
+/// passes), and what light keeps between the two vertices.
+fn geometry(scene: &Scene, a: &Vertex, b: &Vertex, rays: &mut u64) -> (f32, Rgb) {
     let (w, d2) = a.towards(b);
     if d2 == 0.0 || !d2.is_finite() {
-        return 0.0;
+        return (0.0, Rgb::ZERO);
     }
     let mut g = 1.0 / d2;
     if a.is_on_surface() {
@@ -48,10 +50,24 @@ fn geometry(scene: &Scene, a: &Vertex, b: &Vertex, rays: &mut u64) -> f32 {
         g *= b.ns.dot(w).abs();
     }
     if g == 0.0 {
-        return 0.0;
+        return (0.0, Rgb::ZERO);
     }
-    *rays += 1;
-    if visible(scene, a, b) { g } else { 0.0 }
+    let tr = transmittance(scene, a, b, rays);
+    if tr.max_element() > 0.0 { (g, tr) } else { (0.0, Rgb::ZERO) }
+}
+
+/// What light keeps between `a` and `b`: one or zero (visibility) in a scene without media;
+/// with media, the transmittance of every medium along the segment, through the surfaces that
+/// only bound media, and zero when anything else blocks it. Counts the rays it traces.
+fn transmittance(scene: &Scene, a: &Vertex, b: &Vertex, rays: &mut u64) -> Rgb {
+    if !scene.has_media() {
+        *rays += 1;
+        return if visible(scene, a, b) { Rgb::ONE } else { Rgb::ZERO };
+    }
+    let (w, _) = a.towards(b);
+    let ng = if a.is_on_surface() { a.ng } else { Vec3::ZERO };
+    let (target, to_infinity) = if b.infinite { (w, true) } else { (b.p, false) };
+    scene.transmittance(a.p, ng, target, to_infinity, a.medium_towards(w), rays)
 }
 
 fn visible(scene: &Scene, a: &Vertex, b: &Vertex) -> bool {
@@ -107,15 +123,19 @@ fn hit_emitter(scene: &Scene, camera: &[Vertex], t: usize) -> Option<Joined> {
 /// (a shadow ray is traced only for a nonzero value).
 fn reach(scene: &Scene, p: &Vertex, f: Rgb, v: &Vertex, w: Vec3, rays: &mut u64) -> Option<(Rgb, Rgb)> {
     let cos = if p.is_on_surface() { p.ns.dot(w).abs() } else { 1.0 };
-    let base = p.beta * v.beta * cos;
+    let mut base = p.beta * v.beta * cos;
     let mut l = p.beta * f * v.beta;
     if p.is_on_surface() {
         l *= cos;
     }
     if l.max_element() > 0.0 {
-        *rays += 1;
-        if !visible(scene, p, v) {
+        let tr = transmittance(scene, p, v, rays);
+        if tr.max_element() <= 0.0 {
             return None;
+        }
+        if scene.has_media() {
+            l *= tr;
+            base *= tr;
         }
     }
     Some((l, base))
@@ -134,7 +154,7 @@ fn reach_camera<S: Sampler>(scene: &Scene, qs: &Vertex, sampler: &mut S, rays: &
     }
     let mut v = Vertex::camera(cs.p_lens, cs.importance / cs.pdf);
     v.pdf_fwd = 0.0;
-    let f_light = qs.f(&v, TransportMode::Importance);
+    let f_light = qs.f(scene, &v, TransportMode::Importance);
     let (l, base) = reach(scene, qs, f_light, &v, cs.wi, rays)?;
     Some(Joined { sampled: Some(v), raster: Some(cs.raster), f_light, ..Joined::new(l, base) })
 }
@@ -160,7 +180,7 @@ fn reach_light<S: Sampler>(scene: &Scene, pt: &Vertex, sampler: &mut S, rays: &m
         infinite,
     );
     v.pdf_fwd = v.pdf_light_origin(scene, pt);
-    let f_camera = pt.f(&v, TransportMode::Radiance);
+    let f_camera = pt.f(scene, &v, TransportMode::Radiance);
     let (l, base) = reach(scene, pt, f_camera, &v, ls.wi, rays)?;
     Some(Joined { sampled: Some(v), f_camera, ..Joined::new(l, base) })
 }
@@ -170,15 +190,20 @@ fn join(scene: &Scene, qs: &Vertex, pt: &Vertex, rays: &mut u64) -> Option<Joine
     if !qs.connectible(scene) || !pt.connectible(scene) {
         return None;
     }
-    let f_light = qs.f(pt, TransportMode::Importance);
-    let f_camera = pt.f(qs, TransportMode::Radiance);
+    let f_light = qs.f(scene, pt, TransportMode::Importance);
+    let f_camera = pt.f(scene, qs, TransportMode::Radiance);
     let l = qs.beta * f_light * f_camera * pt.beta;
     if l.max_element() <= 0.0 {
         return None;
     }
-    let g = geometry(scene, qs, pt, rays);
-    let base = qs.beta * pt.beta * g;
-    Some(Joined { f_light, f_camera, g, ..Joined::new(l * g, base) })
+    let (g, tr) = geometry(scene, qs, pt, rays);
+    if !scene.has_media() {
+        let base = qs.beta * pt.beta * g;
+        return Some(Joined { f_light, f_camera, g, ..Joined::new(l * g, base) });
+    }
+    // The transmittance is part of the connection's base: roughening never changes it.
+    let base = qs.beta * pt.beta * g * tr;
+    Some(Joined { f_light, f_camera, g, ..Joined::new(l * g * tr, base) })
 }
 
 /// Evaluates strategy `(s, t)`. Numbers for sampling a new endpoint (`s = 1`, `t = 1`) come

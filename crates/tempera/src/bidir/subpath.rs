@@ -7,18 +7,29 @@ use super::vertex::{Vertex, VertexKind, infinite_light_density, scene_sphere};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, spawn_ray};
 use crate::math::Rgb;
+use crate::medium::Flight;
 use crate::sampler::{Sampler, Stream};
 use crate::scene::Scene;
 
-/// The start of a random walk: throughput, direction density and length limit.
+/// The start of a random walk: throughput, direction density, length limit and the medium
+/// the first ray travels in.
 struct Walk {
     beta: Rgb,
     pdf_dir: f32,
     bounces: usize,
     mode: TransportMode,
+    medium: Option<u32>,
 }
 
+/// Surfaces that only bound media a walk may cross between two vertices (a guard against
+/// degenerate geometry).
+const MAX_CROSSINGS: u32 = 4096;
+
 /// Extends `path` from its last vertex along `ray` for at most `walk.bounces` more vertices.
+/// In a medium each ray's free flight is sampled first (two numbers, only there): a scattering
+/// point becomes a medium vertex whose phase function is sampled exactly; a flight that gets
+/// through reaches the surface with the flight's weight. Surfaces that only bound media are
+/// crossed without a vertex, as pbrt-v4 skips them.
 fn random_walk<S: Sampler>(
     scene: &Scene,
     mut ray: Ray,
@@ -27,17 +38,58 @@ fn random_walk<S: Sampler>(
     path: &mut Vec<Vertex>,
     rays: &mut u64,
 ) {
-    let Walk { mut beta, pdf_dir, bounces, mode } = walk;
+    let Walk { mut beta, pdf_dir, bounces, mode, mut medium } = walk;
     let mut pdf_fwd = pdf_dir;
-    for _ in 0..bounces {
+    let (mut made, mut crossings) = (0, 0u32);
+    while made < bounces {
         *rays += 1;
         let prev = *path.last().expect("a subpath starts at an endpoint");
-        let Some(it) = scene.intersect(&ray) else {
+        let hit = scene.intersect(&ray);
+        if let Some(m) = medium {
+            let t_max = hit.as_ref().map_or(f32::INFINITY, |it| it.t);
+            let med = &scene.media[m as usize];
+            match med.sample_flight(sampler.next_1d(), sampler.next_1d(), t_max) {
+                Flight::Scatter { t, weight } => {
+                    beta *= weight;
+                    if !beta.is_finite() || beta.max_element() <= 0.0 {
+                        return;
+                    }
+                    let p = ray.o + ray.d * t;
+                    let mut v = Vertex::in_medium(p, -ray.d, m, beta);
+                    v.pdf_fwd = prev.convert_density(pdf_fwd, &v);
+                    path.push(v);
+                    made += 1;
+                    // The phase function is sampled exactly (weight one) and is symmetric.
+                    let (wi, pdf) = med.sample_phase(-ray.d, sampler.next_2d());
+                    pdf_fwd = pdf;
+                    let n = path.len();
+                    path[n - 2].pdf_rev = path[n - 1].convert_density(pdf, &prev);
+                    ray = Ray::new(p, wi);
+                    continue;
+                }
+                Flight::Through { weight } => {
+                    beta *= weight;
+                    if !beta.is_finite() || beta.max_element() <= 0.0 {
+                        return;
+                    }
+                }
+            }
+        }
+        let Some(it) = hit else {
             if mode == TransportMode::Radiance && !scene.infinite_lights.is_empty() {
                 path.push(Vertex::escaped(&ray, scene, beta, pdf_fwd));
             }
             return;
         };
+        if scene.has_media() && scene.is_interface(&it) {
+            crossings += 1;
+            if crossings > MAX_CROSSINGS {
+                return;
+            }
+            medium = scene.medium_after(&it, ray.d, medium);
+            ray = spawn_ray(it.surface.p, it.surface.ng, ray.d);
+            continue;
+        }
         let bsdf = scene.bsdf(&it);
         let s = it.surface;
         let mut v = Vertex {
@@ -54,9 +106,12 @@ fn random_walk<S: Sampler>(
             delta: false,
             light: scene.area_light(it.prim).map(|(i, _)| i),
             infinite: false,
+            medium,
+            interface: scene.medium_interface(&it),
         };
         v.pdf_fwd = prev.convert_density(pdf_fwd, &v);
         path.push(v);
+        made += 1;
         let uc = sampler.next_1d();
         let u = sampler.next_2d();
         let Some(bs) = bsdf.sample(it.wo, uc, u, mode) else { return };
@@ -78,6 +133,7 @@ fn random_walk<S: Sampler>(
         if !beta.is_finite() || beta.max_element() <= 0.0 {
             return;
         }
+        medium = v.medium_towards(bs.wi);
         ray = spawn_ray(s.p, s.ng, bs.wi);
     }
 }
@@ -120,9 +176,15 @@ pub fn camera_subpath_vertices<S: Sampler>(
         return;
     }
     let (_, pdf_dir) = scene.camera.pdf_we(&ray);
-    path.push(Vertex::camera(ray.o, Rgb::ONE));
+    path.push(Vertex { medium: scene.camera_medium, ..Vertex::camera(ray.o, Rgb::ONE) });
     if pdf_dir > 0.0 && vertices > 1 {
-        let walk = Walk { beta: Rgb::ONE, pdf_dir, bounces: vertices - 1, mode: TransportMode::Radiance };
+        let walk = Walk {
+            beta: Rgb::ONE,
+            pdf_dir,
+            bounces: vertices - 1,
+            mode: TransportMode::Radiance,
+            medium: scene.camera_medium,
+        };
         random_walk(scene, ray, sampler, walk, path, rays);
     }
 }
@@ -170,10 +232,12 @@ pub fn light_subpath_vertices<S: Sampler>(
     if light.is_infinite() {
         v0.pdf_fwd = infinite_light_density(scene, e.ray.d);
     }
+    v0.medium = scene.light_medium(index, e.n, e.ray.d);
     path.push(v0);
     let cos = if e.n == crate::math::Vec3::ZERO || infinite { 1.0 } else { e.n.dot(e.ray.d).abs() };
     let beta = e.le * (cos / (pmf * e.pdf_pos * e.pdf_dir));
-    let walk = Walk { beta, pdf_dir: e.pdf_dir, bounces: vertices - 1, mode: TransportMode::Importance };
+    let walk =
+        Walk { beta, pdf_dir: e.pdf_dir, bounces: vertices - 1, mode: TransportMode::Importance, medium: v0.medium };
     random_walk(scene, e.ray, sampler, walk, path, rays);
     // Positions on the emitting disk of an infinite light are planar: the first surface vertex's
     // density is the disk's, projected (pbrt-v4 §13.3.3).

@@ -71,13 +71,15 @@ pub fn tempered(
     let (f_light, f_camera) = match (s, t, &qs, &pt) {
         (_, 1, Some(qs), _) => {
             let Some(v) = &c.sampled else { return (c.l, c.weight) };
-            (qs.f(v, TransportMode::Importance), c.f_camera)
+            (qs.f(scene, v, TransportMode::Importance), c.f_camera)
         }
         (1, _, _, Some(pt)) => {
             let Some(v) = &c.sampled else { return (c.l, c.weight) };
-            (c.f_light, pt.f(v, TransportMode::Radiance))
+            (c.f_light, pt.f(scene, v, TransportMode::Radiance))
         }
-        (_, _, Some(qs), Some(pt)) => (qs.f(pt, TransportMode::Importance), pt.f(qs, TransportMode::Radiance)),
+        (_, _, Some(qs), Some(pt)) => {
+            (qs.f(scene, pt, TransportMode::Importance), pt.f(scene, qs, TransportMode::Radiance))
+        }
         _ => return (c.l, c.weight),
     };
     let l = c.base * f_light * f_camera;
@@ -115,6 +117,31 @@ mod tests {
     fn tempered_re_evaluation_matches_a_full_evaluation_with_roughened_vertices() {
         let mut scene = crate::scenes::default_scene().build().unwrap();
         scene.set_resolution(32, 32);
+        check_re_evaluation(&scene);
+    }
+
+    /// The same in a scattering medium filling the default scene: connections carry the
+    /// medium's transmittance (in the connection's base, unchanged by roughening), and medium
+    /// vertices, which tempering leaves as they are, are connection vertices too.
+    #[test]
+    fn tempered_re_evaluation_matches_a_full_evaluation_in_a_medium() {
+        use crate::medium::{Medium, MediumInterface};
+        let mut b = crate::scenes::default_scene();
+        let m = b.add_medium(Medium { sigma_a: Rgb::splat(0.02), sigma_s: Rgb::new(0.08, 0.06, 0.04), g: 0.3 });
+        for shape in 0..b.shape_count() {
+            b.set_shape_medium(shape, MediumInterface { inside: Some(m), outside: Some(m) });
+        }
+        b.set_camera_medium(Some(m));
+        let mut scene = b.build().unwrap();
+        scene.set_resolution(32, 32);
+        let medium_connections = check_re_evaluation(&scene);
+        assert!(medium_connections > 100, "{medium_connections} connections at a medium vertex");
+    }
+
+    /// Checks every strategy of 3000 sample paths; returns how many connections had a medium
+    /// vertex at either end.
+    fn check_re_evaluation(scene: &Scene) -> usize {
+        let mut medium_connections = 0;
         let (mut camera, mut light, mut rays) = (Vec::new(), Vec::new(), 0);
         let mut scratch = TemperScratch::default();
         let (mut checked, mut changed, mut light_tracing, mut light_sampling) = (0, 0, 0, 0);
@@ -125,18 +152,18 @@ mod tests {
             sampler.start_stream(Stream::Camera);
             let film = sampler.next_2d();
             let ray = scene.camera.generate_ray(film * 32.0, sampler.next_2d());
-            camera_subpath(&scene, ray, &mut sampler, 5, &mut camera, &mut rays);
-            light_subpath(&scene, &mut sampler, 5, &mut light, &mut rays);
+            camera_subpath(scene, ray, &mut sampler, 5, &mut camera, &mut rays);
+            light_subpath(scene, &mut sampler, 5, &mut light, &mut rays);
             for t in 1..=camera.len() {
                 for s in 1..=light.len() {
                     let paths = Subpaths { light: &light, camera: &camera };
-                    let Some(c) = connect(&scene, paths, (s, t), &mut sampler, Heuristic::Power, &mut rays) else {
+                    let Some(c) = connect(scene, paths, (s, t), &mut sampler, Heuristic::Power, &mut rays) else {
                         continue;
                     };
-                    let (l0, w0) = tempered(&scene, paths, (s, t), &c, &at(0.0, true), &mut scratch);
+                    let (l0, w0) = tempered(scene, paths, (s, t), &c, &at(0.0, true), &mut scratch);
                     assert!(l0 == c.l && w0 == c.weight, "a = 0 is the untempered target exactly");
-                    let (l, w) = tempered(&scene, paths, (s, t), &c, &at(a, true), &mut scratch);
-                    let (_, w_kept) = tempered(&scene, paths, (s, t), &c, &at(a, false), &mut scratch);
+                    let (l, w) = tempered(scene, paths, (s, t), &c, &at(a, true), &mut scratch);
+                    let (_, w_kept) = tempered(scene, paths, (s, t), &c, &at(a, false), &mut scratch);
                     assert_eq!(w_kept, c.weight);
                     // From scratch: roughened copies of the connection vertices, connected anew
                     // with the same connection numbers.
@@ -149,7 +176,7 @@ mod tests {
                         camera2[t - 1] = roughened(&camera[t - 1], a);
                     }
                     let paths2 = Subpaths { light: &light2, camera: &camera2 };
-                    let full = connect(&scene, paths2, (s, t), &mut sampler, Heuristic::Power, &mut rays);
+                    let full = connect(scene, paths2, (s, t), &mut sampler, Heuristic::Power, &mut rays);
                     let Some(full) = full else {
                         assert!(l.max_element() <= 1e-6 * c.l.max_element(), "({s},{t}): {l} but none");
                         continue;
@@ -158,6 +185,9 @@ mod tests {
                     assert!((l - full.l).abs().max_element() <= tol, "({s},{t}): {l} vs {}", full.l);
                     assert!((w - full.weight).abs() <= 1e-4, "({s},{t}): weight {w} vs {}", full.weight);
                     checked += 1;
+                    let at_medium = |v: Option<&Vertex>| v.is_some_and(|v| v.kind == VertexKind::Medium);
+                    medium_connections +=
+                        usize::from(at_medium(light.get(s - 1)) || (t >= 2 && at_medium(camera.get(t - 1))));
                     changed += usize::from((l - c.l).abs().max_element() > 1e-3 * c.l.max_element());
                     light_tracing += usize::from(t == 1);
                     light_sampling += usize::from(s == 1);
@@ -166,5 +196,6 @@ mod tests {
         }
         assert!(checked > 1000 && changed > 100, "{checked} checked, {changed} changed by roughening");
         assert!(light_tracing > 50 && light_sampling > 50, "{light_tracing} t = 1, {light_sampling} s = 1");
+        medium_connections
     }
 }

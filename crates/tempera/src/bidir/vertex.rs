@@ -1,11 +1,20 @@
 //! Path vertices of bidirectional path tracing with their forward and reverse area-measure
 //! densities (Veach 1997 §10.2; pbrt-v4 §13.3 follows the same bookkeeping). Densities are per
 //! unit area at the vertex, except at infinite-light vertices where they stay per solid angle.
+//!
+//! In homogeneous participating media ([`crate::medium`]) a path may scatter at a point inside
+//! a medium: a [`VertexKind::Medium`] vertex, whose scattering function is the medium's phase
+//! function and whose area density has no cosine factor (pbrt-v4 §13.3.2). The densities kept
+//! here are the directional ones only; the free-flight distances' densities are left out of
+//! them, as pbrt-v4's BDPT leaves them out, and the throughput carries each flight's own
+//! weight. Every strategy then computes its MIS weight from the same quantities, so the weights
+//! still sum to one over the strategies that can make a path.
 
 use crate::bsdf::{SurfaceBsdf, TransportMode};
 use crate::geometry::{Ray, SurfacePoint};
 use crate::light::{Light, SceneSphere};
 use crate::math::{Rgb, Vec3};
+use crate::medium::MediumInterface;
 use crate::scene::Scene;
 use std::f32::consts::PI;
 
@@ -14,6 +23,8 @@ pub enum VertexKind {
     Camera,
     Light,
     Surface,
+    /// A scattering point inside a participating medium.
+    Medium,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -39,6 +50,11 @@ pub struct Vertex {
     pub light: Option<u32>,
     /// An infinite or directional light (at infinity, direction-only).
     pub infinite: bool,
+    /// The medium the vertex sits in: for a surface, the one its incoming ray travelled in
+    /// (`None`: vacuum).
+    pub medium: Option<u32>,
+    /// The media a surface vertex separates, when its surface bounds any.
+    pub interface: Option<MediumInterface>,
 }
 
 impl Vertex {
@@ -57,6 +73,22 @@ impl Vertex {
             delta: false,
             light: None,
             infinite: false,
+            medium: None,
+            interface: None,
+        }
+    }
+
+    /// A scattering point at `p` in medium `medium`, reached along `-wo`.
+    pub fn in_medium(p: Vec3, wo: Vec3, medium: u32, beta: Rgb) -> Self {
+        Self { kind: VertexKind::Medium, wo, medium: Some(medium), ..Self::camera(p, beta) }
+    }
+
+    /// The medium a ray leaving this vertex along `w` travels in.
+    #[inline]
+    pub fn medium_towards(&self, w: Vec3) -> Option<u32> {
+        match self.interface {
+            Some(mi) => mi.towards(self.ng, w),
+            None => self.medium,
         }
     }
 
@@ -95,6 +127,7 @@ impl Vertex {
             VertexKind::Camera => true,
             VertexKind::Light => self.light.is_none_or(|l| !scene.lights[l as usize].is_delta_direction()),
             VertexKind::Surface => self.bsdf.is_some_and(|b| !b.is_delta()),
+            VertexKind::Medium => true,
         }
     }
 
@@ -106,12 +139,20 @@ impl Vertex {
         (d / d2.sqrt(), d2)
     }
 
-    /// The BSDF value for scattering from `wo` towards `next`.
-    pub fn f(&self, next: &Vertex, mode: TransportMode) -> Rgb {
-        match &self.bsdf {
-            Some(b) if self.kind == VertexKind::Surface => b.eval(self.wo, self.towards(next).0, mode),
+    /// The BSDF value (the phase function's, in a medium) for scattering from `wo` towards
+    /// `next`.
+    pub fn f(&self, scene: &Scene, next: &Vertex, mode: TransportMode) -> Rgb {
+        match (&self.bsdf, self.kind) {
+            (Some(b), VertexKind::Surface) => b.eval(self.wo, self.towards(next).0, mode),
+            (_, VertexKind::Medium) => Rgb::splat(self.phase(scene, self.wo, self.towards(next).0)),
             _ => Rgb::ZERO,
         }
+    }
+
+    /// The phase function of a medium vertex for `wo`, `wi` pointing away from it.
+    #[inline]
+    fn phase(&self, scene: &Scene, wo: Vec3, wi: Vec3) -> f32 {
+        self.medium.map_or(0.0, |m| scene.media[m as usize].phase(wo, wi))
     }
 
     /// Converts a solid-angle density at this vertex into an area density at `next`.
@@ -141,6 +182,11 @@ impl Vertex {
                 let wo = self.towards(prev).0;
                 let wi = self.towards(next).0;
                 self.convert_density(bsdf.pdf(wo, wi), next)
+            }
+            VertexKind::Medium => {
+                let Some(prev) = prev else { return 0.0 };
+                let (wo, wi) = (self.towards(prev).0, self.towards(next).0);
+                self.convert_density(self.phase(scene, wo, wi), next)
             }
         }
     }

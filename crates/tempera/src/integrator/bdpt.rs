@@ -132,7 +132,6 @@ impl Integrator for BdptIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
-        super::without_media(scene, "bdpt")?;
         let bytes = self.memory_estimate(scene, settings.threads);
         control.check_memory(bytes, "the film and a light-tracing splat buffer per thread")?;
         Ok(render_tiles(self, scene, settings, control))

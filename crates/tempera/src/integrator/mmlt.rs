@@ -67,7 +67,6 @@ impl Integrator for MmltIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
-        super::without_media(scene, "mmlt")?;
         control.check_memory(self.memory_estimate(scene, settings.threads), "a splat buffer per path depth")?;
         let depths = self.max_depth as usize + 1;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)

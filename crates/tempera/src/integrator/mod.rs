@@ -112,16 +112,6 @@ pub struct RenderOutput {
     pub chains: Vec<crate::mcmc::DepthStats>,
 }
 
-/// Integrators that do not yet trace participating media refuse scenes that hold them.
-pub(crate) fn without_media(scene: &Scene, integrator: &str) -> Result<(), String> {
-    if scene.has_media() {
-        return Err(format!(
-            "{integrator} does not render participating media yet; the path tracer does (--integrator path)"
-        ));
-    }
-    Ok(())
-}
-
 /// A light-transport algorithm.
 pub trait Integrator: Send + Sync {
     fn name(&self) -> &'static str;

@@ -51,7 +51,6 @@ impl Integrator for PssmltIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
-        super::without_media(scene, "pssmlt")?;
         control.check_memory(self.memory_estimate(scene, settings.threads), "the splat buffer")?;
         let chain = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
         let target = |_| FullTarget { scene, max_depth: self.max_depth };

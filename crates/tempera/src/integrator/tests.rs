@@ -175,7 +175,13 @@ fn next_event_estimation_agrees_with_bsdf_sampling_on_a_cornell_box() {
 }
 
 /// Compares two renders block by block (z-test on block means) and by image mean.
-fn assert_agree(name: &str, a: &crate::texture::Image, b: &crate::texture::Image, block: usize, mean_tol: f64) {
+pub(crate) fn assert_agree(
+    name: &str,
+    a: &crate::texture::Image,
+    b: &crate::texture::Image,
+    block: usize,
+    mean_tol: f64,
+) {
     let (ba, bb) = (block_stats(a, block), block_stats(b, block));
     let mut beyond = 0;
     for ((ma, sa), (mb, sb)) in ba.iter().zip(&bb) {

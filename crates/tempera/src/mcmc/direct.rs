@@ -8,7 +8,9 @@
 //! density at `y`, zero when occluded or off the film — exactly how light tracing splats onto
 //! the film. Camera rays find a small light rarely; points on the light almost always see the
 //! lens. Environment lights are seen directly too but are not points on a surface: scenes
-//! with any keep the bootstrap's estimate.
+//! with any keep the bootstrap's estimate. Through participating media each estimate carries
+//! the transmittance between the emitter and the lens, the expectation of the depth-0 camera
+//! paths' free-flight weights.
 
 use super::{Moments, target_value};
 use crate::geometry::spawn_ray_to;
@@ -55,6 +57,13 @@ fn sample(scene: &Scene, rng: &mut Pcg32) -> Option<(f32, u64)> {
         return None;
     }
     let cos = s.point.ng.dot(cs.wi).abs();
+    if scene.has_media() {
+        // Through media: what the emitted light keeps on its way to the lens.
+        let mut rays = 0;
+        let medium = scene.light_medium(index, s.point.ng, cs.wi);
+        let tr = scene.transmittance(s.point.p, s.point.ng, cs.p_lens, false, medium, &mut rays);
+        return Some((luminance(le * tr * cs.importance * (cos / (cs.pdf * s.pdf * pmf))), rays));
+    }
     let (ray, t_max) = spawn_ray_to(s.point.p, s.point.ng, cs.p_lens);
     if scene.occluded(&ray, t_max) {
         return Some((0.0, 1));

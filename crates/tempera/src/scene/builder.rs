@@ -77,6 +77,8 @@ pub struct SceneBuilder {
     shape_medium: Vec<Option<MediumInterface>>,
     media: Vec<Medium>,
     camera_medium: Option<u32>,
+    /// Per non-area light, the medium it sits in.
+    light_media: Vec<Option<u32>>,
     prototypes: Vec<Vec<PrototypeShape>>,
     instances: Vec<(u32, Mat4)>,
     lights: Vec<Light>,
@@ -168,9 +170,15 @@ impl SceneBuilder {
         self.instances.push((prototype.0, to_world));
     }
 
-    /// Adds a non-area light (point, spot, distant, infinite).
+    /// Adds a non-area light (point, spot, distant, infinite) in vacuum.
     pub fn add_light(&mut self, light: Light) {
+        self.add_light_in(light, None);
+    }
+
+    /// Adds a non-area light that sits in `medium` (its emitted light starts there).
+    pub fn add_light_in(&mut self, light: Light, medium: Option<u32>) {
         self.lights.push(light);
+        self.light_media.push(medium);
     }
 
     pub fn set_camera(&mut self, camera: CameraDesc) {
@@ -220,7 +228,10 @@ impl SceneBuilder {
         }
         let known = |m: Option<u32>| m.is_none_or(|m| (m as usize) < self.media.len());
         let interfaces = self.shape_medium.iter().flatten();
-        if !known(self.camera_medium) || interfaces.clone().any(|i| !known(i.inside) || !known(i.outside)) {
+        if !known(self.camera_medium)
+            || interfaces.clone().any(|i| !known(i.inside) || !known(i.outside))
+            || !self.light_media.iter().all(|&m| known(m))
+        {
             return Err(SceneError::InvalidMedium("a medium interface names a medium that does not exist".into()));
         }
         for m in &self.media {
@@ -294,6 +305,7 @@ impl SceneBuilder {
             shape_medium: self.shape_medium,
             media: self.media,
             camera_medium: self.camera_medium,
+            light_media: self.light_media,
             prim_light,
             light_sampler: LightSampler::new(&powers),
             lights,

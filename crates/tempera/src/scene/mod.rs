@@ -72,6 +72,8 @@ pub struct Scene {
     pub media: Vec<Medium>,
     /// The medium the camera sits in (`None`: vacuum).
     pub camera_medium: Option<u32>,
+    /// Per light, the medium it sits in where its surface bounds none (`None`: vacuum).
+    light_media: Vec<Option<u32>>,
     prim_light: Vec<u32>,
     pub lights: Vec<Light>,
     pub light_sampler: LightSampler,
@@ -112,11 +114,28 @@ impl Scene {
     /// The media the hit surface separates, if it bounds any.
     #[inline]
     pub fn medium_interface(&self, it: &Interaction) -> Option<MediumInterface> {
-        if self.geometry.instance(it.prim).is_some() {
+        self.prim_medium_interface(it.prim)
+    }
+
+    /// The media primitive `prim` separates, if it bounds any.
+    #[inline]
+    pub fn prim_medium_interface(&self, prim: u32) -> Option<MediumInterface> {
+        if self.media.is_empty() || self.geometry.instance(prim).is_some() {
             return None;
         }
-        let shape = self.geometry.prims[it.prim as usize].shape as usize;
+        let shape = self.geometry.prims[prim as usize].shape as usize;
         self.shape_medium.get(shape).copied().flatten()
+    }
+
+    /// The medium light `light` emits into along `w` (`n`: its surface normal, for area
+    /// lights whose surface bounds media).
+    pub fn light_medium(&self, light: usize, n: Vec3, w: Vec3) -> Option<u32> {
+        if let Some(Light::Area(a)) = self.lights.get(light)
+            && let Some(mi) = self.prim_medium_interface(a.prim)
+        {
+            return mi.towards(n, w);
+        }
+        self.light_media.get(light).copied().flatten()
     }
 
     /// True when the hit surface only bounds media (pbrt's `interface` material): rays pass

@@ -172,7 +172,6 @@ impl Integrator for TemperedIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
-        crate::integrator::without_media(scene, "tempered")?;
         let bytes = self.memory_estimate(scene, settings.threads);
         control.check_memory(bytes, "a splat buffer per path depth and contributing replica")?;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
