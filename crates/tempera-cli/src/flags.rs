@@ -78,6 +78,13 @@ pub struct IntegratorFlags {
     /// roughness-only ladder tuned for 0.234, replica 0 alone writes the image).
     #[arg(long)]
     pub paper: bool,
+    /// SPPM: photons per iteration (default: the scene's photonsperiteration, else one per
+    /// pixel); --spp counts iterations.
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// SPPM: initial search radius in scene units (default: the scene's, else 1).
+    #[arg(long)]
+    pub radius: Option<f32>,
 }
 
 impl IntegratorFlags {
@@ -108,6 +115,8 @@ impl IntegratorFlags {
             },
             swap_every: self.swap_every,
             paper: self.paper.then_some(true),
+            photons: self.photons,
+            radius: self.radius,
         }
     }
 }

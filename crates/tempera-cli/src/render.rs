@@ -20,7 +20,7 @@ pub struct RenderArgs {
     /// Light-transport algorithm (default: the scene's, else path).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorKind>,
-    /// Samples per pixel (default: the scene's).
+    /// Samples per pixel (SPPM: iterations; default: the scene's).
     #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
     /// MCMC integrators: mutations per pixel (deterministic for a seed at any thread count).
@@ -129,7 +129,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let settings = args.integrator_flags.settings(args.strategy_images.is_some());
     let integrator =
-        integrator::create(kind, &settings, scene.defaults.max_depth).map_err(|e| anyhow::anyhow!("{kind}: {e}"))?;
+        integrator::create(kind, &settings, &scene.defaults).map_err(|e| anyhow::anyhow!("{kind}: {e}"))?;
     let budget = match args.time {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),
         None => Budget::Samples(args.mpp.or(args.spp).unwrap_or(scene.defaults.spp)),

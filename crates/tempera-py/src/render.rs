@@ -210,8 +210,8 @@ pub fn render(
         Some(name) => integrator_kind(name)?,
         None => guard.defaults.integrator.unwrap_or(IntegratorKind::Path),
     };
-    let integrator = integrator::create(kind, &settings, guard.defaults.max_depth)
-        .map_err(|e| value_error(format!("{kind}: {e}")))?;
+    let integrator =
+        integrator::create(kind, &settings, &guard.defaults).map_err(|e| value_error(format!("{kind}: {e}")))?;
     if let Some((w, h)) = resolution {
         guard.set_resolution(w, h);
     }
@@ -222,10 +222,7 @@ pub fn render(
     };
     let pixels = u64::from(film.0) * u64::from(film.1);
     let (total, unit) = match budget {
-        Budget::Samples(n) => (
-            pixels * u64::from(n),
-            if matches!(kind, IntegratorKind::Path | IntegratorKind::Bdpt) { "sample" } else { "mutation" },
-        ),
+        Budget::Samples(n) => (pixels * u64::from(n), if kind.is_chain() { "mutation" } else { "sample" }),
         Budget::Time(d) => (d.as_millis() as u64, "ms"),
     };
     let bar = progress_bar(py, progress, total, unit);

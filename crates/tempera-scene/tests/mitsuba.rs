@@ -255,3 +255,20 @@ fn homogeneous_media_load_with_shapes_and_the_sensor() {
     assert_eq!(scene.camera_medium, Some(0));
     assert!(matches!(scene.materials[0], tempera::material::Material::Interface), "{:?}", scene.materials);
 }
+
+/// Mitsuba's `sppm` selects Tempera's with its photon count and initial radius; the automatic
+/// radius (0) is reported.
+#[test]
+fn the_sppm_integrator_keeps_its_photon_count_and_radius() {
+    let text = wrap(
+        "<integrator type=\"sppm\"><integer name=\"photonCount\" value=\"4000\"/>\
+         <float name=\"initialRadius\" value=\"0.02\"/><integer name=\"maxDepth\" value=\"6\"/></integrator>",
+    );
+    let loaded = load_text(&text).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let d = loaded.builder.build().unwrap().defaults;
+    assert_eq!(d.integrator, Some(tempera::integrator::IntegratorKind::Sppm));
+    assert_eq!((d.photons, d.radius, d.max_depth), (Some(4000), Some(0.02), 5));
+    let auto = load_text(&wrap("<integrator type=\"sppm\"/>")).unwrap();
+    assert!(auto.warnings.iter().any(|w| w.message.contains("automatic initial radius")), "{:?}", auto.warnings);
+}

@@ -323,3 +323,23 @@ fn homogeneous_media_load_with_their_interfaces() {
         assert!(e.contains("mem.pbrt:") && e.contains(expect), "{bad}: {e}");
     }
 }
+
+/// pbrt-v4's `sppm` integrator selects Tempera's with its photons per iteration and radius;
+/// without them, one photon per pixel and radius 1 (pbrt-v4's defaults).
+#[test]
+fn the_sppm_integrator_keeps_its_photons_and_radius() {
+    let loaded = load_text(
+        "Integrator \"sppm\" \"float radius\" 0.05 \"integer photonsperiteration\" 5000 \"integer maxdepth\" 7 \
+         \"integer seed\" 3\nCamera \"perspective\"\nWorldBegin\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let d = loaded.builder.build().unwrap().defaults;
+    assert_eq!(d.integrator, Some(tempera::integrator::IntegratorKind::Sppm));
+    assert_eq!((d.photons, d.radius, d.max_depth), (Some(5000), Some(0.05), 7));
+    let plain = load_text("Integrator \"sppm\"\nCamera \"perspective\"\nWorldBegin\nShape \"sphere\"\n").unwrap();
+    let d = plain.builder.build().unwrap().defaults;
+    assert_eq!((d.photons, d.radius), (None, Some(1.0)));
+    let bad = load_text("Integrator \"sppm\" \"float radius\" -1\nCamera \"perspective\"\nWorldBegin\n");
+    assert!(bad.err().unwrap().to_string().contains("positive radius"));
+}

@@ -257,8 +257,8 @@ seeds = [1, 2]
         assert!(format!("{name:#}").contains("method name 'a/b'"), "{name:#}");
         let res = parse(&BASE.replace("32x32", "32")).unwrap_err();
         assert!(format!("{res:#}").contains("WIDTHxHEIGHT"), "{res:#}");
-        let kind = parse(&BASE.replace("integrator = \"mmlt\"", "integrator = \"sppm\"")).unwrap_err();
-        assert!(format!("{kind:#}").contains("unknown variant `sppm`"), "{kind:#}");
+        let kind = parse(&BASE.replace("integrator = \"mmlt\"", "integrator = \"vcm\"")).unwrap_err();
+        assert!(format!("{kind:#}").contains("unknown variant `vcm`"), "{kind:#}");
         let foreign =
             parse(&BASE.replace("integrator = \"mmlt\"", "integrator = \"mmlt\"\nsettings = { replicas = 2 }"))
                 .unwrap_err();

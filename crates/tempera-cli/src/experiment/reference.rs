@@ -122,7 +122,7 @@ pub fn obtain(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Ref
 fn render(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Reference> {
     let r = &config.reference;
     let method = r.method.unwrap_or(IntegratorKind::Bdpt);
-    let integrator = tempera::integrator::create(method, &r.settings, scene.scene.defaults.max_depth)
+    let integrator = tempera::integrator::create(method, &r.settings, &scene.scene.defaults)
         .map_err(|e| anyhow::anyhow!("[reference]: {e}"))?;
     let budget = match r.seconds {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),

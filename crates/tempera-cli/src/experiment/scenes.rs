@@ -46,7 +46,7 @@ pub fn prepare_scenes(config: &Config) -> Result<Vec<PreparedScene>> {
         }
         let mut methods = Vec::new();
         for method in &config.methods {
-            let integrator = tempera::integrator::create(method.integrator, &method.settings, scene.defaults.max_depth)
+            let integrator = tempera::integrator::create(method.integrator, &method.settings, &scene.defaults)
                 .map_err(|e| anyhow::anyhow!("method '{}': {e}", method.name))?;
             methods.push(PreparedMethod { method: method.clone(), integrator });
         }

@@ -215,6 +215,9 @@ impl Loader {
         if props.bool(ctx, "hideEmitters", false)? {
             self.warn(Some(&props.loc), "hideEmitters is not supported: emitters stay visible")?;
         }
+        if ty == "sppm" {
+            self.sppm_settings(ctx, &props)?;
+        }
         self.ignore(ctx, &props, &["strictNormals"], "an option of Mitsuba's path tracers that Tempera does not offer");
         let quiet = [
             "rrDepth",
@@ -237,6 +240,28 @@ impl Loader {
             "a sampling parameter of Mitsuba's integrator; Tempera's integrators sample their own way",
         );
         self.report_unused(ctx, &props, &format!("integrator \"{ty}\""))
+    }
+
+    /// Mitsuba's `sppm`: `photonCount` photons per pass and `initialRadius` (0: Mitsuba's
+    /// automatic choice, which Tempera does not make). Iterations are the samples per pixel, as
+    /// for pbrt-v4 files (`maxPasses` is not read); `alpha` is Tempera's fixed 2/3 (the two
+    /// differ only in how fast the radius shrinks).
+    fn sppm_settings(&mut self, ctx: &Ctx, props: &Props) -> Result<(), LoadError> {
+        let photons = props.int(ctx, "photonCount", 250_000)?;
+        if !(1..=1_000_000_000).contains(&photons) {
+            return Err(ctx.err(&props.loc, format!("photonCount must lie in [1, 10^9], not {photons}")));
+        }
+        self.cx.defaults.photons = Some(photons as u64);
+        let radius = props.float(ctx, "initialRadius", 0.0)?;
+        if radius > 0.0 && radius.is_finite() {
+            self.cx.defaults.radius = Some(radius as f32);
+        } else {
+            self.warn(
+                Some(&props.loc),
+                "sppm's automatic initial radius is not supported: radius 1 unless --radius says otherwise",
+            )?;
+        }
+        Ok(())
     }
 
     fn sensor(&mut self, ctx: &Ctx, n: Node) -> Result<(), LoadError> {

@@ -459,6 +459,21 @@ impl Loader {
             "mlt" => Some(IntegratorKind::Mmlt),
             other => IntegratorKind::from_name(other),
         };
+        if ty == "sppm" {
+            // pbrt-v4's SPPM: photons per iteration (-1: one per pixel) and the initial radius;
+            // its seed is the render's --seed here.
+            let photons = params.int("photonsperiteration", -1)?;
+            let radius = params.float("radius", 1.0)?;
+            if !(radius.is_finite() && radius > 0.0) || photons == 0 || photons > 1_000_000_000 {
+                return Err(LoadError::Syntax {
+                    loc: at,
+                    message: format!("sppm needs a positive radius and photonsperiteration (got {radius}, {photons})"),
+                });
+            }
+            self.cx.defaults.photons = (photons > 0).then_some(photons as u64);
+            self.cx.defaults.radius = Some(radius as f32);
+            params.int("seed", 0)?;
+        }
         self.report_unused(&params, &format!("Integrator \"{ty}\""))
     }
 

@@ -139,7 +139,7 @@ fn random_walk<S: Sampler>(
 }
 
 /// Veach's correction for shading normals in adjoint transport (Veach 1997, §5.3).
-fn shading_normal_correction(
+pub(crate) fn shading_normal_correction(
     wo: crate::math::Vec3,
     wi: crate::math::Vec3,
     ng: crate::math::Vec3,

@@ -10,6 +10,7 @@ pub mod pssmlt;
 pub(crate) mod render_loop;
 pub mod run_stats;
 pub mod settings;
+pub mod sppm;
 pub mod tempered;
 pub mod tiles;
 
@@ -24,6 +25,7 @@ pub use path::PathIntegrator;
 pub use pssmlt::PssmltIntegrator;
 pub use run_stats::RunStats;
 pub use settings::{Allocation, IntegratorKind, IntegratorSettings, LadderTuning, Swap, TemperedMis, create};
+pub use sppm::SppmIntegrator;
 pub use tempered::TemperedIntegrator;
 
 use crate::scene::Scene;

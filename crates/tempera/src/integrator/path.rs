@@ -28,14 +28,16 @@ impl PathIntegrator {
 }
 
 impl PathIntegrator {
-    /// Direct light at `it` by light sampling, MIS-weighted against BSDF sampling.
-    fn sample_light<S: Sampler>(
+    /// Direct light at `it` by light sampling, MIS-weighted against BSDF sampling when `mis`
+    /// (else the whole of it: where no BSDF sample will look for emitters).
+    pub(crate) fn sample_light<S: Sampler>(
         &self,
         scene: &Scene,
         it: &Interaction,
         bsdf: &SurfaceBsdf,
         sampler: &mut S,
         rays: &mut u64,
+        mis: bool,
     ) -> Rgb {
         let u_light = sampler.next_1d();
         let u = sampler.next_2d();
@@ -62,7 +64,7 @@ impl PathIntegrator {
             return Rgb::ZERO;
         }
         let light_pdf = pmf * ls.pdf;
-        if ls.delta {
+        if ls.delta || !mis {
             return f * ls.li / light_pdf;
         }
         let w = power_heuristic(light_pdf, bsdf.pdf(it.wo, ls.wi));
@@ -224,7 +226,7 @@ impl PathIntegrator {
     /// Adds the environment lights seen along `d` by a path that escaped, MIS-weighted against
     /// having sampled them from the previous vertex (which next-event estimation did only when
     /// it is on and that vertex was not specular).
-    fn add_escaped(&self, scene: &Scene, d: Vec3, prev: &PrevVertex, beta: Rgb, l: &mut Rgb) {
+    pub(crate) fn add_escaped(&self, scene: &Scene, d: Vec3, prev: &PrevVertex, beta: Rgb, l: &mut Rgb) {
         for &i in &scene.infinite_lights {
             let light = &scene.lights[i as usize];
             let w = if prev.specular || !self.next_event {
@@ -239,7 +241,7 @@ impl PathIntegrator {
     /// Samples the BSDF to continue the path: multiplies `beta` by the sample's weight and
     /// returns the new direction with what MIS needs of this vertex, or `None` when the path
     /// ends (no sample, or no throughput left).
-    fn sample_bsdf<S: Sampler>(
+    pub(crate) fn sample_bsdf<S: Sampler>(
         it: &Interaction,
         bsdf: &SurfaceBsdf,
         sampler: &mut S,
@@ -273,7 +275,7 @@ impl PathIntegrator {
 impl PathIntegrator {
     /// Emission of the hit surface towards the path and its MIS weight against having
     /// sampled the light from the previous vertex; `None` where the surface does not emit.
-    fn emission(&self, scene: &Scene, it: &Interaction, prev: &PrevVertex) -> Option<(Rgb, f32)> {
+    pub(crate) fn emission(&self, scene: &Scene, it: &Interaction, prev: &PrevVertex) -> Option<(Rgb, f32)> {
         let (index, light) = scene.area_light(it.prim)?;
         let le = scene.emitted(it);
         if le.max_element() <= 0.0 {
@@ -291,10 +293,18 @@ impl PathIntegrator {
 }
 
 /// State carried from one vertex to the next for MIS of emission found by BSDF sampling.
-struct PrevVertex {
+pub(crate) struct PrevVertex {
     p: Vec3,
     bsdf_pdf: f32,
     specular: bool,
+}
+
+impl PathIntegrator {
+    /// What MIS needs of the camera before the first bounce (emission seen directly counts
+    /// whole).
+    pub(crate) fn first_vertex(&self, p: Vec3) -> PrevVertex {
+        PrevVertex { p, bsdf_pdf: 0.0, specular: true }
+    }
 }
 
 impl PixelEstimator for PathIntegrator {
@@ -325,7 +335,7 @@ impl PixelEstimator for PathIntegrator {
             depth += 1;
             let bsdf = scene.bsdf(&it);
             if self.next_event && !bsdf.is_delta() {
-                l += beta * self.sample_light(scene, &it, &bsdf, sampler, rays);
+                l += beta * self.sample_light(scene, &it, &bsdf, sampler, rays, true);
             }
             let Some((wi, next)) = Self::sample_bsdf(&it, &bsdf, sampler, &mut beta) else {
                 break;

@@ -3,9 +3,12 @@
 //! turns into an integrator. Every setting is optional; an absent one keeps the integrator's
 //! default (or, for `maxdepth`, the scene's).
 
-use super::{BdptIntegrator, Integrator, MmltIntegrator, PathIntegrator, PssmltIntegrator, TemperedIntegrator};
+use super::{
+    BdptIntegrator, Integrator, MmltIntegrator, PathIntegrator, PssmltIntegrator, SppmIntegrator, TemperedIntegrator,
+};
 use crate::bidir::Heuristic;
 use crate::integrator::tempered::Permutation;
+use crate::scene::RenderDefaults;
 use serde::{Deserialize, Serialize};
 
 /// The light-transport algorithms.
@@ -18,15 +21,17 @@ pub enum IntegratorKind {
     Mmlt,
     Pssmlt,
     Tempered,
+    Sppm,
 }
 
 impl IntegratorKind {
-    pub const ALL: [IntegratorKind; 5] = [
+    pub const ALL: [IntegratorKind; 6] = [
         IntegratorKind::Path,
         IntegratorKind::Bdpt,
         IntegratorKind::Mmlt,
         IntegratorKind::Pssmlt,
         IntegratorKind::Tempered,
+        IntegratorKind::Sppm,
     ];
 
     pub fn name(self) -> &'static str {
@@ -36,6 +41,7 @@ impl IntegratorKind {
             IntegratorKind::Mmlt => "mmlt",
             IntegratorKind::Pssmlt => "pssmlt",
             IntegratorKind::Tempered => "tempered",
+            IntegratorKind::Sppm => "sppm",
         }
     }
 
@@ -173,6 +179,12 @@ pub struct IntegratorSettings {
     /// writing the image (the swap strategy stays free).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper: Option<bool>,
+    /// SPPM: photons per iteration (absent: the scene's, else one per pixel).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub photons: Option<u64>,
+    /// SPPM: the initial search radius in scene units (absent: the scene's, else 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f32>,
 }
 
 fn check_range<T: PartialOrd + std::fmt::Display>(
@@ -220,6 +232,8 @@ impl IntegratorSettings {
             ("reuse_replicas", self.reuse_replicas.is_some(), tempered),
             ("swap_every", self.swap_every.is_some(), tempered),
             ("paper", self.paper.is_some(), tempered),
+            ("photons", self.photons.is_some(), kind == Sppm),
+            ("radius", self.radius.is_some(), kind == Sppm),
         ];
         given.iter().filter(|(_, set, applies)| *set && !applies).map(|(name, ..)| *name).collect()
     }
@@ -257,6 +271,12 @@ impl IntegratorSettings {
         check_probability("collapse_above", self.collapse_above)?;
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
         check_range("swap_every", self.swap_every, 1..=1_000_000)?;
+        check_range("photons", self.photons, 1..=1_000_000_000)?;
+        if let Some(r) = self.radius
+            && !(r.is_finite() && r > 0.0)
+        {
+            return Err(format!("radius must be positive, not {r}"));
+        }
         if let Some(ladder) = &self.ladder {
             if ladder.is_empty() || ladder.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 1000.0) {
                 return Err(format!("ladder values must lie in (0, 1000], not {ladder:?}"));
@@ -290,16 +310,17 @@ impl IntegratorSettings {
     }
 }
 
-/// The integrator `kind` with `settings` (checked first), paths of at most `scene_max_depth`
-/// scattering events unless the settings say otherwise.
+/// The integrator `kind` with `settings` (checked first); what they leave out comes from the
+/// scene's `defaults` (paths of at most its `max_depth` scattering events, SPPM's photons and
+/// radius), else from the integrator's own defaults.
 pub fn create(
     kind: IntegratorKind,
     settings: &IntegratorSettings,
-    scene_max_depth: u32,
+    defaults: &RenderDefaults,
 ) -> Result<Box<dyn Integrator>, String> {
     settings.validate(kind)?;
     let s = settings;
-    let d = s.maxdepth.unwrap_or(scene_max_depth);
+    let d = s.maxdepth.unwrap_or(defaults.max_depth);
     Ok(match kind {
         IntegratorKind::Path => Box::new(PathIntegrator::new(d)),
         IntegratorKind::Bdpt => Box::new(BdptIntegrator {
@@ -347,6 +368,14 @@ pub fn create(
                 ..m
             })
         }
+        IntegratorKind::Sppm => {
+            let m = SppmIntegrator::new(d);
+            Box::new(SppmIntegrator {
+                photons: s.photons.or(defaults.photons).unwrap_or(m.photons),
+                radius: s.radius.or(defaults.radius).unwrap_or(m.radius),
+                ..m
+            })
+        }
     })
 }
 
@@ -373,7 +402,7 @@ mod tests {
     #[test]
     fn settings_are_checked_against_the_integrator_and_each_other() {
         let ok = IntegratorSettings { replicas: Some(3), ladder: Some(vec![0.1, 0.3]), ..Default::default() };
-        assert!(create(IntegratorKind::Tempered, &ok, 5).is_ok());
+        assert!(create(IntegratorKind::Tempered, &ok, &RenderDefaults::default()).is_ok());
         let cases = [
             (IntegratorKind::Mmlt, IntegratorSettings { replicas: Some(3), ..Default::default() }, "replicas is not"),
             (IntegratorKind::Path, IntegratorSettings { mis: Some(Heuristic::Balance), ..Default::default() }, "mis"),
@@ -391,6 +420,9 @@ mod tests {
                 IntegratorSettings { collapse_above: Some(0.0), ..Default::default() },
                 "collapse_above must be a probability",
             ),
+            (IntegratorKind::Mmlt, IntegratorSettings { photons: Some(10), ..Default::default() }, "photons is not"),
+            (IntegratorKind::Sppm, IntegratorSettings { radius: Some(-1.0), ..Default::default() }, "radius must be"),
+            (IntegratorKind::Sppm, IntegratorSettings { photons: Some(0), ..Default::default() }, "photons must lie"),
             (
                 IntegratorKind::Mmlt,
                 IntegratorSettings { collapse_above: Some(0.5), ..Default::default() },
@@ -408,7 +440,9 @@ mod tests {
             ),
         ];
         for (kind, settings, needle) in cases {
-            let err = create(kind, &settings, 5).err().unwrap_or_default();
+            let err = create(kind, &settings, &RenderDefaults { max_depth: 5, ..RenderDefaults::default() })
+                .err()
+                .unwrap_or_default();
             assert!(err.contains(needle), "{kind} {settings:?}: {err:?}");
         }
     }
@@ -418,6 +452,7 @@ mod tests {
         for kind in IntegratorKind::ALL {
             assert_eq!(IntegratorKind::from_name(kind.name()), Some(kind));
         }
-        assert_eq!(IntegratorKind::from_name("sppm"), None);
+        assert_eq!(IntegratorKind::from_name("sppm"), Some(IntegratorKind::Sppm));
+        assert_eq!(IntegratorKind::from_name("vcm"), None);
     }
 }

@@ -41,11 +41,15 @@ pub struct RenderDefaults {
     pub integrator: Option<crate::integrator::IntegratorKind>,
     /// The output file the scene asks for.
     pub output: Option<std::path::PathBuf>,
+    /// SPPM's photons per iteration, when the scene says.
+    pub photons: Option<u64>,
+    /// SPPM's initial search radius, when the scene says.
+    pub radius: Option<f32>,
 }
 
 impl Default for RenderDefaults {
     fn default() -> Self {
-        Self { spp: 16, max_depth: 5, integrator: None, output: None }
+        Self { spp: 16, max_depth: 5, integrator: None, output: None, photons: None, radius: None }
     }
 }
 
