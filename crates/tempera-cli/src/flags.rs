@@ -4,7 +4,7 @@
 
 use clap::Args;
 use tempera::bidir::Heuristic;
-use tempera::integrator::{Allocation, IntegratorSettings, LadderTuning, Swap, TemperedMis};
+use tempera::integrator::{Allocation, IntegratorSettings, LadderTuning, PhotonSampler, Swap, TemperedMis};
 
 /// The flags of `tempera render` that set up the integrator. They are parsed as plain values;
 /// their ranges and their agreement with each other and with the integrator are checked where
@@ -85,6 +85,11 @@ pub struct IntegratorFlags {
     /// SPPM: initial search radius in scene units (default: the scene's, else 1).
     #[arg(long)]
     pub radius: Option<f32>,
+    /// SPPM: how photon paths are sampled: uniform (default, as pbrt-v4), or mcmc (Markov
+    /// chains whose target is the photon path's visibility, exchanging states with uniform
+    /// photons; Hachisuka & Jensen 2011).
+    #[arg(long, value_enum)]
+    pub photon_sampler: Option<PhotonSampler>,
 }
 
 impl IntegratorFlags {
@@ -117,6 +122,7 @@ impl IntegratorFlags {
             paper: self.paper.then_some(true),
             photons: self.photons,
             radius: self.radius,
+            photon_sampler: self.photon_sampler,
         }
     }
 }

@@ -25,7 +25,7 @@ pub use path::PathIntegrator;
 pub use pssmlt::PssmltIntegrator;
 pub use run_stats::RunStats;
 pub use settings::{Allocation, IntegratorKind, IntegratorSettings, LadderTuning, Swap, TemperedMis, create};
-pub use sppm::SppmIntegrator;
+pub use sppm::{PhotonSampler, SppmIntegrator};
 pub use tempered::TemperedIntegrator;
 
 use crate::scene::Scene;

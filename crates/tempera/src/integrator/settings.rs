@@ -7,6 +7,7 @@ use super::{
     BdptIntegrator, Integrator, MmltIntegrator, PathIntegrator, PssmltIntegrator, SppmIntegrator, TemperedIntegrator,
 };
 use crate::bidir::Heuristic;
+use crate::integrator::sppm::PhotonSampler;
 use crate::integrator::tempered::Permutation;
 use crate::scene::RenderDefaults;
 use serde::{Deserialize, Serialize};
@@ -185,6 +186,9 @@ pub struct IntegratorSettings {
     /// SPPM: the initial search radius in scene units (absent: the scene's, else 1).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub radius: Option<f32>,
+    /// SPPM: how photon paths are sampled (uniformly, or by Markov chains on visibility).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub photon_sampler: Option<PhotonSampler>,
 }
 
 fn check_range<T: PartialOrd + std::fmt::Display>(
@@ -234,6 +238,7 @@ impl IntegratorSettings {
             ("paper", self.paper.is_some(), tempered),
             ("photons", self.photons.is_some(), kind == Sppm),
             ("radius", self.radius.is_some(), kind == Sppm),
+            ("photon_sampler", self.photon_sampler.is_some(), kind == Sppm),
         ];
         given.iter().filter(|(_, set, applies)| *set && !applies).map(|(name, ..)| *name).collect()
     }
@@ -373,6 +378,7 @@ pub fn create(
             Box::new(SppmIntegrator {
                 photons: s.photons.or(defaults.photons).unwrap_or(m.photons),
                 radius: s.radius.or(defaults.radius).unwrap_or(m.radius),
+                photon_sampler: s.photon_sampler.unwrap_or(m.photon_sampler),
                 ..m
             })
         }

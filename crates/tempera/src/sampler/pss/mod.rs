@@ -107,6 +107,19 @@ impl PssSampler {
         self.large_step = self.rng.next_f32() < self.large_step_probability;
     }
 
+    /// Begins a proposal of the kind asked for: a large step (independent uniforms) or a
+    /// small one.
+    pub fn start_iteration_as(&mut self, large: bool) {
+        self.iteration += 1;
+        self.large_step = large;
+    }
+
+    /// Changes the width of small steps (an adaptive chain's mutation size); zero re-proposes
+    /// the current state.
+    pub fn set_sigma(&mut self, sigma: f32) {
+        self.sigma = sigma;
+    }
+
     pub fn is_large_step(&self) -> bool {
         self.large_step
     }

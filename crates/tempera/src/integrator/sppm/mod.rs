@@ -27,14 +27,36 @@ use crate::film::{Filter, SharedSplats};
 use crate::geometry::{Ray, spawn_ray};
 use crate::math::rng::hash;
 use crate::math::{Rgb, Vec2, Vec3};
-use crate::sampler::{IndependentSampler, Sampler};
+use crate::sampler::{IndependentSampler, Sampler, Stream};
 use crate::scene::Scene;
 use crate::texture::Image;
+use grid::Grid;
+use photon_chains::PhotonChains;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+mod grid;
+mod photon_chains;
+
 /// The fraction of new photons kept per iteration (Hachisuka & Jensen's α).
 const GAMMA: f64 = 2.0 / 3.0;
+
+/// How photon paths are sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum PhotonSampler {
+    /// Independent photons from the lights (pbrt-v4's SPPM).
+    #[default]
+    Uniform,
+    /// Markov chains whose target is the photon path's visibility, exchanging states with
+    /// uniform photons.
+    Mcmc,
+}
+
+/// Markov chains of the MCMC photon sampler (a fixed number, so that the image does not depend
+/// on the thread count).
+const PHOTON_CHAINS: usize = 64;
 
 #[derive(Clone, Copy, Debug)]
 pub struct SppmIntegrator {
@@ -43,11 +65,12 @@ pub struct SppmIntegrator {
     pub photons: u64,
     /// The initial search radius of every visible point, in scene units.
     pub radius: f32,
+    pub photon_sampler: PhotonSampler,
 }
 
 impl SppmIntegrator {
     pub fn new(max_depth: u32) -> Self {
-        Self { max_depth, photons: 0, radius: 1.0 }
+        Self { max_depth, photons: 0, radius: 1.0, photon_sampler: PhotonSampler::Uniform }
     }
 
     fn photons_per_iteration(&self, scene: &Scene) -> u64 {
@@ -101,93 +124,6 @@ fn sample_filter<S: Sampler>(filter: &Filter, sampler: &mut S) -> Vec2 {
     Vec2::ZERO
 }
 
-/// A hashed uniform grid over the visible points (pbrt-v3 §16.2.4): each point is entered in
-/// every cell its search sphere overlaps; cells hash into as many buckets as there are points.
-struct Grid {
-    lo: Vec3,
-    cell: Vec3,
-    res: [i64; 3],
-    /// Bucket `b`'s points are `entries[offsets[b]..offsets[b + 1]]`.
-    offsets: Vec<u32>,
-    entries: Vec<u32>,
-}
-
-impl Grid {
-    fn build(points: &[Option<VisiblePoint>], pixels: &[PixelState]) -> Option<Grid> {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        let mut max_r = 0.0f32;
-        let mut count = 0usize;
-        for (vp, px) in points.iter().zip(pixels) {
-            let Some(vp) = vp else { continue };
-            let r = px.radius as f32;
-            lo = lo.min(vp.p - Vec3::splat(r));
-            hi = hi.max(vp.p + Vec3::splat(r));
-            max_r = max_r.max(r);
-            count += 1;
-        }
-        if count == 0 || !lo.is_finite() || !hi.is_finite() || max_r <= 0.0 {
-            return None;
-        }
-        let diag = (hi - lo).max(Vec3::splat(1e-6));
-        let max_diag = diag.max_element();
-        // About one cell per search diameter along the longest side, at most 2^20 per axis.
-        let base = (f64::from(max_diag) / f64::from(max_r)).clamp(1.0, f64::from(1u32 << 20));
-        let res = [0, 1, 2].map(|i| ((base * f64::from(diag[i] / max_diag)) as i64).max(1));
-        let cell = diag / Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
-        let grid = Grid { lo, cell, res, offsets: Vec::new(), entries: Vec::new() };
-        let buckets = count as u64;
-        let mut pairs: Vec<(u32, u32)> = points
-            .par_iter()
-            .zip(pixels)
-            .enumerate()
-            .flat_map_iter(|(i, (vp, px))| {
-                let mut out = Vec::new();
-                if let Some(vp) = vp {
-                    let r = px.radius as f32;
-                    let (a, b) = (grid.cell_of(vp.p - Vec3::splat(r)), grid.cell_of(vp.p + Vec3::splat(r)));
-                    for z in a[2]..=b[2] {
-                        for y in a[1]..=b[1] {
-                            for x in a[0]..=b[0] {
-                                out.push((Grid::bucket([x, y, z], buckets), i as u32));
-                            }
-                        }
-                    }
-                }
-                out
-            })
-            .collect();
-        pairs.par_sort_unstable();
-        // A point whose cells share a bucket is entered once.
-        pairs.dedup();
-        let mut offsets = vec![0u32; count + 1];
-        for &(b, _) in &pairs {
-            offsets[b as usize + 1] += 1;
-        }
-        for b in 0..count {
-            offsets[b + 1] += offsets[b];
-        }
-        let entries = pairs.into_iter().map(|(_, i)| i).collect();
-        Some(Grid { offsets, entries, ..grid })
-    }
-
-    fn cell_of(&self, p: Vec3) -> [i64; 3] {
-        let c = (p - self.lo) / self.cell;
-        [0, 1, 2].map(|i| (c[i].floor() as i64).clamp(0, self.res[i] - 1))
-    }
-
-    fn bucket(c: [i64; 3], buckets: u64) -> u32 {
-        (hash(&[c[0] as u64, c[1] as u64, c[2] as u64]) % buckets) as u32
-    }
-
-    /// The visible points whose cells might hold `p`.
-    fn near(&self, p: Vec3) -> &[u32] {
-        let buckets = (self.offsets.len() - 1) as u64;
-        let b = Grid::bucket(self.cell_of(p), buckets) as usize;
-        &self.entries[self.offsets[b] as usize..self.offsets[b + 1] as usize]
-    }
-}
-
 impl SppmIntegrator {
     /// The camera pass of one pixel: its direct estimate, its visible point (if the path found
     /// one) and the rays traced.
@@ -236,74 +172,116 @@ impl SppmIntegrator {
         out
     }
 
-    /// Traces photon `j` of iteration `iteration`, adding to the visible points near each
-    /// surface it reaches after the first; returns the rays traced.
-    #[allow(clippy::too_many_arguments)]
-    fn photon(
+    /// The uniform photon pass: photon `j` of iteration `iteration` from its own hashed
+    /// numbers, straight into the sums. Returns the rays traced.
+    fn uniform_photons(
         &self,
         scene: &Scene,
-        grid: &Grid,
-        points: &[Option<VisiblePoint>],
-        pixels: &[PixelState],
-        (phi, counts): (&SharedSplats, &[AtomicU64]),
+        targets: &Targets,
+        sums: &PhotonSums,
         seed: u64,
-        (iteration, j): (u64, u64),
+        iteration: u64,
+        photons: u64,
     ) -> u64 {
-        let mut sampler = IndependentSampler::new(hash(&[seed, 0x9407, iteration, j]), 0x9407);
-        let Some((index, pmf)) = scene.light_sampler.sample(sampler.next_1d()) else { return 0 };
-        let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
-        let light = &scene.lights[index];
-        let Some(e) = light.sample_le(&scene.geometry, scene_sphere(scene), u_pos, u_dir) else { return 0 };
-        let infinite = light.is_infinite() || light.is_delta_direction();
-        let cos = if e.n == Vec3::ZERO || infinite { 1.0 } else { e.n.dot(e.ray.d).abs() };
-        let denom = pmf * e.pdf_pos * e.pdf_dir;
-        if denom.is_nan() || denom <= 0.0 {
-            return 0;
+        (0..photons)
+            .into_par_iter()
+            .map(|j| {
+                let mut sampler = IndependentSampler::new(hash(&[seed, 0x9407, iteration, j]), 0x9407);
+                trace_photon(scene, self.max_depth, targets, &mut sampler, &mut |i, v| sums.add(i, v)).0
+            })
+            .sum()
+    }
+}
+
+/// What a photon pass sees of the visible points: the grid over them, the points, and the
+/// pixels' radii.
+struct Targets<'a> {
+    grid: &'a Grid,
+    points: &'a [Option<VisiblePoint>],
+    pixels: &'a [PixelState],
+}
+
+/// Traces one photon path with numbers from `sampler` (from its light stream), handing every
+/// contribution `β·f` to a visible point within its radius to `deposit(pixel, value)`, at each
+/// surface after the first. Returns the rays traced and whether the path reached any visible
+/// point (its *visibility*, Hachisuka & Jensen 2011).
+fn trace_photon<S: Sampler>(
+    scene: &Scene,
+    max_depth: u32,
+    targets: &Targets,
+    sampler: &mut S,
+    deposit: &mut dyn FnMut(usize, Rgb),
+) -> (u64, bool) {
+    sampler.start_stream(Stream::Light);
+    let Some((index, pmf)) = scene.light_sampler.sample(sampler.next_1d()) else { return (0, false) };
+    let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
+    let light = &scene.lights[index];
+    let Some(e) = light.sample_le(&scene.geometry, scene_sphere(scene), u_pos, u_dir) else { return (0, false) };
+    let infinite = light.is_infinite() || light.is_delta_direction();
+    let cos = if e.n == Vec3::ZERO || infinite { 1.0 } else { e.n.dot(e.ray.d).abs() };
+    let denom = pmf * e.pdf_pos * e.pdf_dir;
+    if denom.is_nan() || denom <= 0.0 {
+        return (0, false);
+    }
+    let mut beta = e.le * (cos / denom);
+    let mut ray: Ray = e.ray;
+    let (mut rays, mut visible) = (0, false);
+    for depth in 0..max_depth {
+        if !beta.is_finite() || beta.max_element() <= 0.0 {
+            break;
         }
-        let mut beta = e.le * (cos / denom);
-        let mut ray: Ray = e.ray;
-        let width = scene.film.width as usize;
-        let mut rays = 0;
-        for depth in 0..self.max_depth {
-            if !beta.is_finite() || beta.max_element() <= 0.0 {
-                break;
-            }
-            rays += 1;
-            let Some(it) = scene.intersect(&ray) else { break };
-            let p = it.surface.p;
-            if depth > 0 {
-                let wi = -ray.d;
-                for &i in grid.near(p) {
-                    let i = i as usize;
-                    let (Some(vp), px) = (&points[i], &pixels[i]) else { continue };
-                    let r = px.radius as f32;
-                    if (vp.p - p).length_squared() > r * r {
-                        continue;
-                    }
-                    let f = vp.bsdf.eval(vp.wo, wi, TransportMode::Radiance);
-                    let contribution = beta * f;
-                    if contribution.max_element() > 0.0 {
-                        let raster = Vec2::new((i % width) as f32 + 0.5, (i / width) as f32 + 0.5);
-                        phi.add(raster, contribution);
-                    }
-                    counts[i].fetch_add(1, Ordering::Relaxed);
+        rays += 1;
+        let Some(it) = scene.intersect(&ray) else { break };
+        let p = it.surface.p;
+        if depth > 0 {
+            let wi = -ray.d;
+            for &i in targets.grid.near(p) {
+                let i = i as usize;
+                let (Some(vp), px) = (&targets.points[i], &targets.pixels[i]) else { continue };
+                let r = px.radius as f32;
+                if (vp.p - p).length_squared() > r * r {
+                    continue;
                 }
+                visible = true;
+                deposit(i, beta * vp.bsdf.eval(vp.wo, wi, TransportMode::Radiance));
             }
-            let bsdf = scene.bsdf(&it);
-            let (uc, u) = (sampler.next_1d(), sampler.next_2d());
-            let Some(bs) = bsdf.sample(it.wo, uc, u, TransportMode::Importance) else { break };
-            let correction =
-                crate::bidir::subpath::shading_normal_correction(it.wo, bs.wi, it.surface.ng, bsdf.frame.n);
-            let next = beta * bs.f * (bs.wi.dot(bsdf.frame.n).abs() / bs.pdf * correction);
-            // Russian roulette on the throughput's change (pbrt-v4's photon pass).
-            let survive = (next.max_element() / beta.max_element()).min(1.0);
-            if survive.is_nan() || survive <= 0.0 || sampler.next_1d() >= survive {
-                break;
-            }
-            beta = next / survive;
-            ray = spawn_ray(p, it.surface.ng, bs.wi);
         }
-        rays
+        let bsdf = scene.bsdf(&it);
+        let (uc, u) = (sampler.next_1d(), sampler.next_2d());
+        let Some(bs) = bsdf.sample(it.wo, uc, u, TransportMode::Importance) else { break };
+        let correction = crate::bidir::subpath::shading_normal_correction(it.wo, bs.wi, it.surface.ng, bsdf.frame.n);
+        let next = beta * bs.f * (bs.wi.dot(bsdf.frame.n).abs() / bs.pdf * correction);
+        // Russian roulette on the throughput's change (pbrt-v4's photon pass).
+        let survive = (next.max_element() / beta.max_element()).min(1.0);
+        if survive.is_nan() || survive <= 0.0 || sampler.next_1d() >= survive {
+            break;
+        }
+        beta = next / survive;
+        ray = spawn_ray(p, it.surface.ng, bs.wi);
+    }
+    (rays, visible)
+}
+
+/// Photon sums of one iteration: `Φ` per pixel in fixed point and the photon count `M`.
+struct PhotonSums {
+    phi: SharedSplats,
+    counts: Vec<AtomicU64>,
+    width: usize,
+}
+
+impl PhotonSums {
+    fn new(w: u32, h: u32) -> Self {
+        let n = w as usize * h as usize;
+        Self { phi: SharedSplats::new(w, h), counts: (0..n).map(|_| AtomicU64::new(0)).collect(), width: w as usize }
+    }
+
+    /// Adds one photon's contribution to pixel `i`'s visible point.
+    fn add(&self, i: usize, value: Rgb) {
+        if value.max_element() > 0.0 {
+            let raster = Vec2::new((i % self.width) as f32 + 0.5, (i / self.width) as f32 + 0.5);
+            self.phi.add(raster, value);
+        }
+        self.counts[i].fetch_add(1, Ordering::Relaxed);
     }
 }
 
@@ -376,6 +354,9 @@ impl SppmIntegrator {
         let mut stats = RenderStats::default();
         let mut snapshots = render.snapshots(settings.budget);
         let mut iteration = 0u64;
+        let mut visible_sum = 0.0;
+        let mut chains = (self.photon_sampler == PhotonSampler::Mcmc)
+            .then(|| PhotonChains::new(seed, PHOTON_CHAINS.min(photons.max(1) as usize)));
         while iteration < max_iterations && !(iteration > 0 && render.should_stop()) && !render.cancelled() {
             // Camera pass.
             let camera_rays: u64 = points
@@ -394,17 +375,21 @@ impl SppmIntegrator {
                 })
                 .sum();
             // Photon pass.
-            let phi = SharedSplats::new(w, h);
-            let counts: Vec<AtomicU64> = (0..n).map(|_| AtomicU64::new(0)).collect();
-            let photon_rays: u64 = match Grid::build(&points, &pixels) {
-                Some(grid) => (0..photons)
-                    .into_par_iter()
-                    .map(|j| self.photon(scene, &grid, &points, &pixels, (&phi, &counts), seed, (iteration, j)))
-                    .sum(),
-                None => 0,
+            let sums = PhotonSums::new(w, h);
+            let (photon_rays, scale) = match Grid::build(&points, &pixels) {
+                Some(grid) => {
+                    let targets = Targets { grid: &grid, points: &points, pixels: &pixels };
+                    match &mut chains {
+                        None => (self.uniform_photons(scene, &targets, &sums, seed, iteration, photons), 1.0),
+                        Some(chains) => chains.run(scene, self.max_depth, &targets, &sums, photons),
+                    }
+                }
+                None => (0, 1.0),
             };
-            // Progressive update.
-            let phi = phi.image(1.0);
+            visible_sum += scale;
+            // Progressive update; the photon sums scaled to photons per iteration.
+            let PhotonSums { phi, counts, .. } = sums;
+            let phi = phi.image(scale);
             pixels.par_iter_mut().zip(&points).zip(&counts).zip(&phi.pixels).for_each(|(((px, vp), m), phi)| {
                 let m = m.load(Ordering::Relaxed) as f64;
                 let Some(vp) = vp else { return };
@@ -434,15 +419,10 @@ impl SppmIntegrator {
         }
         stats.spp_completed = iteration.min(u64::from(u32::MAX)) as u32;
         render.finish(&mut stats);
-        RenderOutput {
-            image: develop(&pixels, (w, h), iteration, photons),
-            stats,
-            layers: Vec::new(),
-            chains: Vec::new(),
-        }
+        let chains = chains.map(|c| vec![c.stats(visible_sum / iteration.max(1) as f64)]).unwrap_or_default();
+        RenderOutput { image: develop(&pixels, (w, h), iteration, photons), stats, layers: Vec::new(), chains }
     }
 }
 
 #[cfg(test)]
-#[path = "sppm_tests.rs"]
 mod tests;
