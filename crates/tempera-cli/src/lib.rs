@@ -6,6 +6,8 @@ pub mod compare;
 pub mod experiment;
 pub mod flags;
 pub mod info;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 pub mod render;
 pub mod run;
 pub mod scene;

@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+use tempera::cluster::Cluster;
 use tempera_cli::{compare, experiment, info, render};
 
 #[derive(Parser)]
@@ -27,14 +28,40 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Built with MPI, every process of an `mpirun` shares each render; MPI is finalised when
+    // `_universe` is dropped, at the end.
+    #[cfg(feature = "mpi")]
+    let (_universe, mpi) = match tempera_cli::mpi::initialise() {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            return ExitCode::FAILURE;
+        }
+    };
+    #[cfg(feature = "mpi")]
+    let cluster: &dyn Cluster = &mpi;
+    #[cfg(not(feature = "mpi"))]
+    let cluster: &dyn Cluster = &tempera::cluster::SOLO;
     let result = match cli.command {
-        Command::Render(args) => render::run(*args),
+        Command::Render(args) => render::run_on(*args, cluster),
+        _ if cluster.is_distributed() => {
+            if cluster.is_root() {
+                Err(anyhow::anyhow!("only `tempera render` shares its work among MPI ranks; run this in one process"))
+            } else {
+                Err(render::Reported.into())
+            }
+        }
         Command::Info(args) => info::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Experiment(args) => experiment::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<render::Reported>() => ExitCode::FAILURE,
+        Err(e) if cluster.is_distributed() && !cluster.is_root() => {
+            eprintln!("error (rank {}): {e:#}", cluster.rank());
+            ExitCode::FAILURE
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

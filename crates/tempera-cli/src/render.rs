@@ -9,6 +9,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
+use tempera::cluster::Cluster;
 use tempera::integrator::{self, Budget, IntegratorKind, RenderSettings, RunStats};
 use tempera::scene::Scene;
 use tempera_image::{WriteOptions, write_image};
@@ -114,10 +115,53 @@ fn integrator_kind(args: &RenderArgs, loaded: &Loaded) -> IntegratorKind {
     IntegratorKind::Path
 }
 
+/// An error that rank 0 has already reported for every rank: the other ranks exit without
+/// repeating it.
+#[derive(Debug)]
+pub struct Reported;
+
+impl std::fmt::Display for Reported {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("reported by rank 0")
+    }
+}
+
+impl std::error::Error for Reported {}
+
 pub fn run(args: RenderArgs) -> Result<()> {
+    run_on(args, &tempera::cluster::SOLO)
+}
+
+/// Loads the scene on every rank; every rank stops with rank 0's message when any rank could
+/// not (instead of waiting for it in the first exchange).
+fn load_everywhere(args: &RenderArgs, cluster: &dyn Cluster) -> Result<Loaded> {
+    let loaded = scene::load(args.scene.as_deref(), args.strict);
+    if !cluster.is_distributed() {
+        return loaded;
+    }
+    let message = loaded.as_ref().err().map(|e| format!("{e:#}")).unwrap_or_default();
+    let messages = cluster.gather(message.into_bytes());
+    let first = messages.iter().enumerate().find(|(_, m)| !m.is_empty());
+    let failed = cluster.broadcast(first.is_some());
+    if !failed {
+        return loaded;
+    }
+    match first {
+        Some((0, m)) => bail!("{}", String::from_utf8_lossy(m)),
+        Some((rank, m)) => bail!("rank {rank} could not load the scene: {}", String::from_utf8_lossy(m)),
+        None => Err(Reported.into()),
+    }
+}
+
+/// Renders with the work shared among the processes of `cluster`; rank 0 writes the image(s),
+/// the statistics and the summary.
+pub fn run_on(args: RenderArgs, cluster: &dyn Cluster) -> Result<()> {
     check_outputs(&args.output)?;
-    let loaded = scene::load(args.scene.as_deref(), args.strict)?;
-    scene::print_warnings(&loaded.warnings, 20);
+    let root = cluster.is_root();
+    let loaded = load_everywhere(&args, cluster)?;
+    if root {
+        scene::print_warnings(&loaded.warnings, 20);
+    }
     let kind = integrator_kind(&args, &loaded);
     let mut scene = loaded.scene;
     if let Some((w, h)) = args.resolution {
@@ -136,8 +180,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let render_settings = RenderSettings { budget, seed: args.seed, threads: args.threads };
     run::install_interrupt_handler();
-    let job = Job { max_memory: args.max_memory, ..Job::new(&scene, integrator.as_ref(), render_settings, args.quiet) };
+    let quiet = args.quiet || !root;
+    let job =
+        Job { max_memory: args.max_memory, cluster, ..Job::new(&scene, integrator.as_ref(), render_settings, quiet) };
     let out = job.run()?;
+    if !root {
+        return Ok(());
+    }
 
     let options = WriteOptions { exposure: args.exposure };
     for path in &outputs {
@@ -149,7 +198,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             write_image(&dir.join(format!("{name}.exr")), layer, &options)?;
         }
     }
-    let stats = RunStats::new(integrator.name(), &out);
+    let stats = RunStats { ranks: cluster.size(), ..RunStats::new(integrator.name(), &out) };
     if !args.quiet {
         summary(&args, &scene, integrator.name(), &out.stats, &outputs, !out.chains.is_empty());
         crate::stats::print_table(&stats);

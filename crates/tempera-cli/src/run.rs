@@ -64,6 +64,8 @@ pub struct Job<'a> {
     pub on_snapshot: &'a (dyn Fn(usize, &RenderOutput) + Sync),
     /// The most memory the render may take (bytes); `None`: what the machine has available.
     pub max_memory: Option<u64>,
+    /// The processes the render is shared among.
+    pub cluster: &'a dyn tempera::cluster::Cluster,
 }
 
 fn no_snapshot(_: usize, _: &RenderOutput) {}
@@ -79,6 +81,7 @@ impl<'a> Job<'a> {
             snapshots: &[],
             on_snapshot: &no_snapshot,
             max_memory: None,
+            cluster: &tempera::cluster::SOLO,
         }
     }
 
@@ -95,7 +98,8 @@ impl<'a> Job<'a> {
         };
         let control = RenderControl::new(&CANCEL, &on_progress)
             .with_snapshots(self.snapshots, self.on_snapshot)
-            .with_max_memory(self.max_memory);
+            .with_max_memory(self.max_memory)
+            .with_cluster(self.cluster);
         let out = self.integrator.render(self.scene, &self.settings, &control);
         bar.finish_and_clear();
         out.map_err(anyhow::Error::msg)

@@ -11,6 +11,7 @@ pub mod mcmc;
 pub mod texture;
 
 pub mod camera;
+pub mod cluster;
 pub mod film;
 pub mod integrator;
 pub mod light;

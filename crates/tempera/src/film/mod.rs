@@ -113,6 +113,27 @@ impl TileBuffer {
     }
 }
 
+impl TileBuffer {
+    /// The buffer, bit for bit, for another process ([`crate::cluster`]).
+    pub fn encode(&self, w: &mut crate::cluster::Wire) {
+        w.u64(self.x0 as u64).u64(self.y0 as u64).u64(self.width as u64).u64(self.height as u64);
+        w.u64(self.invalid_samples);
+        for s in &self.sums {
+            for v in s {
+                w.f64(*v);
+            }
+        }
+    }
+
+    /// A buffer [`Self::encode`] wrote, on the film `film`.
+    pub fn decode(film: &FilmDesc, r: &mut crate::cluster::Reader) -> Self {
+        let (x0, y0, width, height) = (r.u64() as i64, r.u64() as i64, r.u64() as i64, r.u64() as i64);
+        let invalid_samples = r.u64();
+        let sums = (0..width * height).map(|_| [r.f64(), r.f64(), r.f64(), r.f64()]).collect();
+        Self { x0, y0, width, height, sums, filter: film.filter, invalid_samples }
+    }
+}
+
 /// The whole film's weighted sums.
 #[derive(Clone, Debug)]
 pub struct Film {

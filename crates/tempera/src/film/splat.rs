@@ -63,6 +63,26 @@ impl SplatBuffer {
         self.invalid += other.invalid;
     }
 
+    /// The sums, for another process ([`crate::cluster`]).
+    pub fn encode(&self, w: &mut crate::cluster::Wire) {
+        w.u64(self.invalid);
+        for s in &self.sums {
+            for v in s {
+                w.i128(*v);
+            }
+        }
+    }
+
+    /// Adds the sums [`Self::encode`] wrote for a buffer of the same size.
+    pub fn merge_encoded(&mut self, r: &mut crate::cluster::Reader) {
+        self.invalid += r.u64();
+        for s in &mut self.sums {
+            for v in s.iter_mut() {
+                *v += r.i128();
+            }
+        }
+    }
+
     /// The accumulated image multiplied by `scale`.
     pub fn image(&self, scale: f64) -> Image {
         let pixels = self
@@ -124,6 +144,25 @@ impl SharedSplats {
     /// Splats dropped because their value was NaN, infinite, negative or out of range.
     pub fn invalid(&self) -> u64 {
         self.invalid.load(Ordering::Relaxed)
+    }
+
+    /// The fixed-point sums (three per pixel) and the dropped count, last.
+    pub fn values(&self) -> Vec<i64> {
+        let mut v: Vec<i64> = self.sums.iter().flat_map(|s| s.iter().map(|a| a.load(Ordering::Relaxed))).collect();
+        v.push(self.invalid() as i64);
+        v
+    }
+
+    /// A buffer holding `values` as [`Self::values`] gives them.
+    pub fn from_values(width: u32, height: u32, values: &[i64]) -> Self {
+        let b = Self::new(width, height);
+        for (s, v) in b.sums.iter().zip(values.chunks_exact(3)) {
+            for (a, &x) in s.iter().zip(v) {
+                a.store(x, Ordering::Relaxed);
+            }
+        }
+        b.invalid.store(values.last().copied().unwrap_or(0) as u64, Ordering::Relaxed);
+        b
     }
 
     /// The accumulated image multiplied by `scale` (consistent once the adding threads have

@@ -65,6 +65,8 @@ pub struct RenderControl<'a> {
     pub on_snapshot: &'a (dyn Fn(usize, &RenderOutput) + Sync),
     /// The most memory a render may take, in bytes; `None`: what the machine has available.
     pub max_memory: Option<u64>,
+    /// The processes the render is shared among ([`crate::cluster::Solo`]: this one alone).
+    pub cluster: &'a dyn crate::cluster::Cluster,
 }
 
 fn no_snapshot(_: usize, _: &RenderOutput) {}
@@ -72,7 +74,19 @@ fn no_snapshot(_: usize, _: &RenderOutput) {}
 impl<'a> RenderControl<'a> {
     /// A control without snapshots.
     pub fn new(cancel: &'a AtomicBool, on_progress: &'a (dyn Fn(u64) + Sync)) -> Self {
-        Self { cancel, on_progress, snapshots: &[], on_snapshot: &no_snapshot, max_memory: None }
+        Self {
+            cancel,
+            on_progress,
+            snapshots: &[],
+            on_snapshot: &no_snapshot,
+            max_memory: None,
+            cluster: &crate::cluster::SOLO,
+        }
+    }
+
+    /// The same control for a render shared among the processes of `cluster`.
+    pub fn with_cluster(self, cluster: &'a dyn crate::cluster::Cluster) -> Self {
+        Self { cluster, ..self }
     }
 
     /// The same control with a memory limit of `bytes` instead of the available memory.

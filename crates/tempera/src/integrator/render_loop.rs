@@ -85,6 +85,11 @@ impl Snapshots<'_> {
         self.times.get(self.next).map(|&t| self.start + t)
     }
 
+    /// True when a snapshot is due and the render is not cancelled.
+    pub fn is_due(&self, render: &RenderLoop) -> bool {
+        self.next_due().is_some_and(|d| Instant::now() >= d) && !render.cancelled()
+    }
+
     /// When a snapshot is due and the render is not cancelled, develops the image so far
     /// (`develop` receives the seconds elapsed) and hands it to the control as every snapshot
     /// that is due now (several when one step of the render outlasted more than one requested

@@ -21,6 +21,17 @@ pub struct RunStats {
     pub mutations_per_second: f64,
     /// Per path depth (or one row for all, PSSMLT): the Markov chains' statistics.
     pub depths: Vec<DepthRecord>,
+    /// Processes (MPI ranks) the render was shared among; written only when more than one.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub ranks: usize,
+}
+
+fn one() -> usize {
+    1
+}
+
+fn is_one(v: &usize) -> bool {
+    *v == 1
 }
 
 /// Which depths a row covers: one, or all (PSSMLT's single set of chains), written `"all"`.
@@ -210,6 +221,7 @@ impl RunStats {
             mutations,
             mutations_per_second: mutations as f64 / s.seconds.max(1e-9),
             depths: out.chains.iter().map(DepthRecord::new).collect(),
+            ranks: 1,
         }
     }
 }

@@ -10,6 +10,7 @@ use super::render_loop::RenderLoop;
 use super::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats};
 use crate::bidir::Paths;
 use crate::camera::Camera;
+use crate::cluster::{Cluster, Reader, Wire};
 use crate::film::{Film, SplatBuffer, Tile, TileBuffer};
 use crate::geometry::Ray;
 use crate::math::{Rgb, Vec2};
@@ -109,15 +110,17 @@ impl Pass<'_> {
         estimator: &E,
         tiles: &[Tile],
         buffers: &[Mutex<ThreadBuffers>],
-    ) -> Vec<TileResult> {
+        cluster: &dyn Cluster,
+    ) -> Vec<(usize, TileResult)> {
         tiles
             .par_iter()
             .copied()
             .enumerate()
+            .filter(|(i, _)| cluster.owns(*i))
             .map(|t| {
                 let index = rayon::current_thread_index().unwrap_or(0) % buffers.len();
                 let mut buffers = buffers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-                self.render_tile(estimator, t, &mut buffers)
+                (t.0, self.render_tile(estimator, t, &mut buffers))
             })
             .collect()
     }
@@ -167,6 +170,51 @@ impl Pass<'_> {
     }
 }
 
+/// Every rank's tile results at rank 0, in tile order; the other ranks keep their own.
+fn exchange_tiles(
+    cluster: &dyn Cluster,
+    film: &crate::film::FilmDesc,
+    own: Vec<(usize, TileResult)>,
+) -> Vec<(usize, TileResult)> {
+    let mut w = Wire::default();
+    w.u64(own.len() as u64);
+    for (i, r) in &own {
+        w.u64(*i as u64).u64(r.samples).u64(r.rays).u64(u64::from(r.next_row));
+        r.buffer.encode(&mut w);
+    }
+    let all = cluster.gather(w.bytes);
+    if !cluster.is_root() {
+        return own;
+    }
+    let mut results: Vec<(usize, TileResult)> = Vec::new();
+    for bytes in &all {
+        let mut r = Reader::new(bytes);
+        for _ in 0..r.u64() {
+            let (i, samples, rays, next_row) = (r.u64() as usize, r.u64(), r.u64(), r.u64() as u32);
+            let buffer = TileBuffer::decode(film, &mut r);
+            results.push((i, TileResult { buffer, samples, rays, next_row }));
+        }
+    }
+    results.sort_by_key(|(i, _)| *i);
+    results
+}
+
+/// The threads' light-tracing splats so far, summed over the ranks at rank 0.
+fn merged_splats(cluster: &dyn Cluster, buffers: &[Mutex<ThreadBuffers>], (sw, sh): Size) -> SplatBuffer {
+    let mut splats = SplatBuffer::new(sw, sh);
+    for buffers in buffers {
+        splats.merge(&buffers.lock().unwrap_or_else(std::sync::PoisonError::into_inner).splats);
+    }
+    if cluster.is_distributed() {
+        let mut w = Wire::default();
+        splats.encode(&mut w);
+        for bytes in cluster.gather(w.bytes).iter().skip(1) {
+            splats.merge_encoded(&mut Reader::new(bytes));
+        }
+    }
+    splats
+}
+
 /// The image of `film` plus the splats so far, which estimate the image per sample.
 fn develop(film: &Film, splats: &SplatBuffer, splatting: bool, pixel_samples: u64) -> Image {
     let mut image = film.develop();
@@ -189,6 +237,7 @@ pub fn render_tiles<E: PixelEstimator>(
     control: &RenderControl,
 ) -> RenderOutput {
     let render = RenderLoop::new(settings, control);
+    let cluster = control.cluster;
     let tiles = scene.film.tiles(TILE_SIZE);
     let mut film = Film::new(scene.film);
     let (sw, sh) = if E::SPLATS { (scene.film.width, scene.film.height) } else { (0, 0) };
@@ -218,40 +267,58 @@ pub fn render_tiles<E: PixelEstimator>(
             render: &render,
             resume: &resume,
         };
-        if render.cancelled() || (done > 0 && render.past_deadline()) {
+        // Rank 0 decides for every rank (a single process decides alone).
+        if cluster.broadcast(render.cancelled() || (done > 0 && render.past_deadline())) {
             break;
         }
-        let results = render.install(|| pass.run(estimator, &tiles, &thread_buffers));
+        let results = render.install(|| pass.run(estimator, &tiles, &thread_buffers, cluster));
+        // Rank 0 merges every rank's tiles in tile order, as a single process merges its own.
+        let results = if cluster.is_distributed() { exchange_tiles(cluster, &scene.film, results) } else { results };
         let mut finished = true;
-        for (r, (row, tile)) in results.iter().zip(resume.iter_mut().zip(&tiles)) {
-            film.merge(&r.buffer);
-            stats.pixel_samples += r.samples;
-            stats.rays += r.rays;
-            finished &= r.next_row == tile.y1;
-            *row = r.next_row;
-        }
-        snapshots.take(&render, |seconds| {
-            let mut splats = SplatBuffer::new(sw, sh);
-            for buffers in &thread_buffers {
-                splats.merge(&buffers.lock().unwrap_or_else(std::sync::PoisonError::into_inner).splats);
+        for (i, r) in &results {
+            if cluster.is_root() {
+                film.merge(&r.buffer);
+                stats.pixel_samples += r.samples;
+                stats.rays += r.rays;
             }
-            RenderOutput {
+            finished &= r.next_row == tiles[*i].y1;
+            resume[*i] = r.next_row;
+        }
+        let finished = cluster.broadcast(finished);
+        if cluster.broadcast(snapshots.is_due(&render)) {
+            let splats = merged_splats(cluster, &thread_buffers, (sw, sh));
+            snapshots.take(&render, |seconds| RenderOutput {
                 image: develop(&film, &splats, E::SPLATS, stats.pixel_samples),
                 stats: RenderStats { spp_completed: done, seconds, ..stats.clone() },
                 layers: Vec::new(),
                 chains: Vec::new(),
-            }
-        });
+            });
+        }
         if finished {
             done += size;
             for (row, tile) in resume.iter_mut().zip(&tiles) {
                 *row = tile.y0;
             }
-        } else if render.should_stop() {
+        } else if cluster.broadcast(render.should_stop()) {
             break;
         }
     }
-    let ThreadBuffers { splats, layers, .. } = ThreadBuffers::merged(thread_buffers, (sw, sh), layer_count, (fw, fh));
+    let ThreadBuffers { mut splats, mut layers, .. } =
+        ThreadBuffers::merged(thread_buffers, (sw, sh), layer_count, (fw, fh));
+    if cluster.is_distributed() {
+        let mut w = Wire::default();
+        splats.encode(&mut w);
+        for layer in &layers {
+            layer.encode(&mut w);
+        }
+        for bytes in cluster.gather(w.bytes).iter().skip(1) {
+            let mut r = Reader::new(bytes);
+            splats.merge_encoded(&mut r);
+            for layer in &mut layers {
+                layer.merge_encoded(&mut r);
+            }
+        }
+    }
     stats.spp_completed = done;
     stats.invalid_samples = film.invalid_samples + splats.invalid;
     render.finish(&mut stats);

@@ -18,6 +18,7 @@
 
 use super::bootstrap::{Bootstrap, sampler_for};
 use super::{Chain, DepthStats, Moments, Target};
+use crate::cluster::{Cluster, Reader, Wire};
 use crate::film::SharedSplats;
 use crate::integrator::render_loop::RenderLoop;
 use crate::integrator::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats};
@@ -317,30 +318,44 @@ impl ChainSettings {
         let stop = || render.should_stop();
         let (prepared, rays) = self.prepare(&plan, &mut walkers, seed, groups, w, h, &stop);
         total_rays += rays;
+        // Every rank prepares every group alike; each runs the walkers dealt to it.
+        let cluster = render.control.cluster;
         let run_round = |walkers: &mut [W], quota: &(dyn Fn(&Slot) -> u64 + Sync)| {
-            walkers.par_iter_mut().zip(&plan).for_each(|(walker, slot)| {
-                let group = prepared[slot.group].as_ref().expect("every planned group is prepared");
-                let done = walker.run(&group.shared, quota(slot), &group.splats, &stop);
-                render.progress(done);
-            });
+            walkers.par_iter_mut().zip(&plan).enumerate().filter(|(i, _)| cluster.owns(*i)).for_each(
+                |(_, (walker, slot))| {
+                    let group = prepared[slot.group].as_ref().expect("every planned group is prepared");
+                    let done = walker.run(&group.shared, quota(slot), &group.splats, &stop);
+                    render.progress(done);
+                },
+            );
         };
-        // The image so far, its statistics taken `seconds` after the start.
+        // The image so far (at rank 0, from every rank's walkers), its statistics taken
+        // `seconds` after the start.
         let developed = |walkers: &[W], seconds: f64| {
-            let out = develop(&boots, walkers, &plan, &prepared, (w, h));
+            let reports = gather_reports(cluster, walkers, &plan, &prepared);
+            let summed = cluster.is_distributed().then(|| sum_splats(cluster, &prepared));
+            let out = develop(&boots, &reports, &plan, &prepared, summed.as_deref(), (w, h));
             RenderOutput { stats: RenderStats { rays: out.stats.rays + total_rays, seconds, ..out.stats }, ..out }
         };
         match budget {
             // A fixed budget: one round, each walker its share of its group's mutations.
             Some(_) => run_round(&mut walkers, &Slot::quota),
             // A time budget: rounds of about one mutation per pixel, shared in proportion to
-            // b_k, until the deadline. Snapshots (if asked for) are developed between rounds.
+            // b_k, until the deadline (rank 0's). Snapshots (if asked for) are developed
+            // between rounds.
             None => {
                 let mut snapshots = render.snapshots(settings.budget);
-                while !stop() {
+                while !cluster.broadcast(stop()) {
                     run_round(&mut walkers, &|slot| {
                         ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1)
                     });
-                    snapshots.take(render, |seconds| developed(&walkers, seconds));
+                    if cluster.broadcast(snapshots.is_due(render)) {
+                        let out = developed(&walkers, 0.0);
+                        snapshots.take(render, |seconds| RenderOutput {
+                            stats: RenderStats { seconds, ..out.stats.clone() },
+                            ..out
+                        });
+                    }
                 }
             }
         }
@@ -391,15 +406,90 @@ impl ChainSettings {
     }
 }
 
-/// The image and per-group statistics of `walkers` so far: statistics merged in walker
-/// order, each layer's normalisation `b_l` refined with the large-step proposals, each layer's
-/// splats scaled to estimate its share of the image per mutation. Rays count the walkers'
-/// rays only.
-fn develop<W: Walker>(
-    boots: &[Bootstrap],
+/// What developing the image needs of one walker.
+#[derive(Clone, Debug, Default)]
+struct Report {
+    stats: DepthStats,
+    /// Per layer, the moments of its target over the walker's large steps.
+    large: Vec<Moments>,
+    rays: u64,
+}
+
+impl Report {
+    fn of<W: Walker>(walker: &W, layers: usize) -> Self {
+        Report { stats: walker.stats(), large: (0..layers).map(|l| walker.large(l)).collect(), rays: walker.rays() }
+    }
+}
+
+/// Every walker's report, at rank 0 (each from the rank that runs it); the other ranks get
+/// their own walkers' reports and defaults elsewhere.
+fn gather_reports<W: Walker>(
+    cluster: &dyn Cluster,
     walkers: &[W],
     plan: &[Slot],
     groups: &[Option<Group<W::Group>>],
+) -> Vec<Report> {
+    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.splats.len());
+    let mut reports: Vec<Report> = walkers
+        .iter()
+        .zip(plan)
+        .enumerate()
+        .map(
+            |(i, (walker, slot))| {
+                if cluster.owns(i) { Report::of(walker, layers(slot.group)) } else { Report::default() }
+            },
+        )
+        .collect();
+    if !cluster.is_distributed() {
+        return reports;
+    }
+    let mut w = Wire::default();
+    for (i, r) in reports.iter().enumerate().filter(|(i, _)| cluster.owns(*i)) {
+        w.u64(i as u64).u64(r.rays).u64(r.large.len() as u64);
+        for m in &r.large {
+            w.f64(m.sum).f64(m.sum2).u64(m.n);
+        }
+        r.stats.encode(&mut w);
+    }
+    for bytes in cluster.gather(w.bytes).iter().skip(1) {
+        let mut r = Reader::new(bytes);
+        while !r.is_empty() {
+            let (i, rays) = (r.u64() as usize, r.u64());
+            let large = (0..r.u64()).map(|_| Moments { sum: r.f64(), sum2: r.f64(), n: r.u64() }).collect();
+            reports[i] = Report { stats: DepthStats::decode(&mut r), large, rays };
+        }
+    }
+    reports
+}
+
+/// Every prepared group's splat buffers summed over the ranks (integer sums, exact).
+fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) -> Vec<Vec<SharedSplats>> {
+    groups
+        .iter()
+        .map(|g| {
+            let Some(g) = g else { return Vec::new() };
+            g.splats
+                .iter()
+                .map(|b| {
+                    let mut values = b.values();
+                    cluster.sum(&mut values);
+                    SharedSplats::from_values(b.width, b.height, &values)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The image and per-group statistics of the walkers' `reports` so far: statistics merged in
+/// walker order, each layer's normalisation `b_l` refined with the large-step proposals, each
+/// layer's splats (`summed` over the ranks, else the groups' own) scaled to estimate its share
+/// of the image per mutation. Rays count the walkers' rays only.
+fn develop<L: Layers>(
+    boots: &[Bootstrap],
+    reports: &[Report],
+    plan: &[Slot],
+    groups: &[Option<Group<L>>],
+    summed: Option<&[Vec<SharedSplats>]>,
     (w, h): (u32, u32),
 ) -> RenderOutput {
     let pixels = u64::from(w) * u64::from(h);
@@ -408,13 +498,13 @@ fn develop<W: Walker>(
         (0..boots.len()).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect();
     let mut large: Vec<Vec<Moments>> = (0..boots.len()).map(|k| vec![Moments::default(); layers(k)]).collect();
     let mut rays = 0;
-    for (walker, slot) in walkers.iter().zip(plan) {
+    for (report, slot) in reports.iter().zip(plan) {
         let k = slot.group;
-        stats[k].merge(&walker.stats());
-        for (l, sums) in large[k].iter_mut().enumerate() {
-            sums.merge(&walker.large(l));
+        stats[k].merge(&report.stats);
+        for (sums, m) in large[k].iter_mut().zip(&report.large) {
+            sums.merge(m);
         }
-        rays += walker.rays();
+        rays += report.rays;
     }
     let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
     let mut invalid = 0;
@@ -434,7 +524,8 @@ fn develop<W: Walker>(
             invalid += d.invalid;
             continue;
         };
-        invalid += d.invalid + group.splats.iter().map(SharedSplats::invalid).sum::<u64>();
+        let buffers = summed.map_or(group.splats.as_slice(), |s| s[k].as_slice());
+        invalid += d.invalid + buffers.iter().map(SharedSplats::invalid).sum::<u64>();
         d.replica_b_ratios = group.shared.ratios().iter().map(|&r| r as f32).collect();
         d.prepare_seconds = group.seconds;
         if d.mutations == 0 {
@@ -443,7 +534,7 @@ fn develop<W: Walker>(
         // Layer l estimates its share of the group's image per mutation: N_pixels · b_l/ρ_l / M_k
         // (MMLT's N_pixels · b_k / M_k for one layer).
         let mut layer_b = Vec::with_capacity(group.splats.len());
-        for (l, buffer) in group.splats.iter().enumerate() {
+        for (l, buffer) in buffers.iter().enumerate() {
             let (b, ratio) = match (l, group.shared.layer(l)) {
                 (0, _) => (d.b, 1.0),
                 (_, Some((moments, ratio))) => (refine(moments, &large[k][l]).0, ratio),

@@ -1,5 +1,7 @@
 //! Per-depth chain statistics, counted per chain and merged once (DESIGN §6.7).
 
+use crate::cluster::{Reader, Wire};
+
 /// What the chains of one path depth did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DepthStats {
@@ -40,6 +42,86 @@ pub struct DepthStats {
 }
 
 impl DepthStats {
+    /// Every field, bit for bit, for another process ([`crate::cluster`]).
+    pub fn encode(&self, w: &mut Wire) {
+        w.u64(self.depth as u64).u64(u64::from(self.all_depths)).f64(self.b).f64(self.b_rel_se);
+        w.u64(self.bootstrap_samples).u64(self.large_step_samples).f64(self.spread).u64(self.mutations);
+        w.u64(self.large_steps_proposed).u64(self.large_steps_accepted);
+        w.u64(self.small_steps_proposed).u64(self.small_steps_accepted).u64(self.technique_changes);
+        w.u64(self.invalid).f64(self.seconds).f64(self.prepare_seconds);
+        w.u64(self.ladder.len() as u64);
+        for &a in &self.ladder {
+            w.f64(f64::from(a));
+        }
+        w.u64(self.ladder_ensembles);
+        match &self.swaps {
+            None => {
+                w.u64(0);
+            }
+            Some(sw) => {
+                w.u64(1).u64(sw.replicas as u64).u64(sw.attempts.len() as u64);
+                for (&a, &b) in sw.attempts.iter().zip(&sw.accepted) {
+                    w.u64(a).u64(b);
+                }
+                w.u64(sw.steps).u64(sw.no_pair).u64(sw.non_identity).u64(sw.main_changed);
+            }
+        }
+        w.u64(self.replica_b_ratios.len() as u64);
+        for &r in &self.replica_b_ratios {
+            w.f64(f64::from(r));
+        }
+        w.u64(self.replica_b.len() as u64);
+        for &b in &self.replica_b {
+            w.f64(b);
+        }
+    }
+
+    /// Statistics [`Self::encode`] wrote.
+    pub fn decode(r: &mut Reader) -> Self {
+        let mut d = DepthStats {
+            depth: r.u64() as usize,
+            all_depths: r.u64() != 0,
+            b: r.f64(),
+            b_rel_se: r.f64(),
+            bootstrap_samples: r.u64(),
+            large_step_samples: r.u64(),
+            spread: r.f64(),
+            mutations: r.u64(),
+            large_steps_proposed: r.u64(),
+            large_steps_accepted: r.u64(),
+            small_steps_proposed: r.u64(),
+            small_steps_accepted: r.u64(),
+            technique_changes: r.u64(),
+            invalid: r.u64(),
+            seconds: r.f64(),
+            prepare_seconds: r.f64(),
+            ..DepthStats::default()
+        };
+        d.ladder = (0..r.u64()).map(|_| r.f64() as f32).collect();
+        d.ladder_ensembles = r.u64();
+        if r.u64() == 1 {
+            let replicas = r.u64() as usize;
+            let n = r.u64() as usize;
+            let (mut attempts, mut accepted) = (Vec::with_capacity(n), Vec::with_capacity(n));
+            for _ in 0..n {
+                attempts.push(r.u64());
+                accepted.push(r.u64());
+            }
+            d.swaps = Some(SwapStats {
+                replicas,
+                attempts,
+                accepted,
+                steps: r.u64(),
+                no_pair: r.u64(),
+                non_identity: r.u64(),
+                main_changed: r.u64(),
+            });
+        }
+        d.replica_b_ratios = (0..r.u64()).map(|_| r.f64() as f32).collect();
+        d.replica_b = (0..r.u64()).map(|_| r.f64()).collect();
+        d
+    }
+
     pub fn merge(&mut self, o: &DepthStats) {
         self.mutations += o.mutations;
         self.large_steps_proposed += o.large_steps_proposed;

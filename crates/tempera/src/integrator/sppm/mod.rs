@@ -180,11 +180,12 @@ impl SppmIntegrator {
         targets: &Targets,
         sums: &PhotonSums,
         seed: u64,
-        iteration: u64,
-        photons: u64,
+        (iteration, photons): (u64, u64),
+        owns: &(dyn Fn(usize) -> bool + Sync),
     ) -> u64 {
         (0..photons)
             .into_par_iter()
+            .filter(|&j| owns(j as usize))
             .map(|j| {
                 let mut sampler = IndependentSampler::new(hash(&[seed, 0x9407, iteration, j]), 0x9407);
                 trace_photon(scene, self.max_depth, targets, &mut sampler, &mut |i, v| sums.add(i, v)).0
@@ -275,6 +276,17 @@ impl PhotonSums {
         Self { phi: SharedSplats::new(w, h), counts: (0..n).map(|_| AtomicU64::new(0)).collect(), width: w as usize }
     }
 
+    /// These sums added up over the ranks of `cluster` (integer sums: exact).
+    fn summed(self, cluster: &dyn crate::cluster::Cluster) -> Self {
+        let mut values = self.phi.values();
+        let n = values.len();
+        values.extend(self.counts.iter().map(|c| c.load(Ordering::Relaxed) as i64));
+        cluster.sum(&mut values);
+        let phi = SharedSplats::from_values(self.phi.width, self.phi.height, &values[..n]);
+        let counts = values[n..].iter().map(|&c| AtomicU64::new(c as u64)).collect();
+        Self { phi, counts, width: self.width }
+    }
+
     /// Adds one photon's contribution to pixel `i`'s visible point.
     fn add(&self, i: usize, value: Rgb) {
         if value.max_element() > 0.0 {
@@ -357,7 +369,10 @@ impl SppmIntegrator {
         let mut visible_sum = 0.0;
         let mut chains = (self.photon_sampler == PhotonSampler::Mcmc)
             .then(|| PhotonChains::new(seed, PHOTON_CHAINS.min(photons.max(1) as usize)));
-        while iteration < max_iterations && !(iteration > 0 && render.should_stop()) && !render.cancelled() {
+        let cluster = render.control.cluster;
+        while iteration < max_iterations
+            && !cluster.broadcast((iteration > 0 && render.should_stop()) || render.cancelled())
+        {
             // Camera pass.
             let camera_rays: u64 = points
                 .par_iter_mut()
@@ -376,17 +391,26 @@ impl SppmIntegrator {
                 .sum();
             // Photon pass.
             let sums = PhotonSums::new(w, h);
-            let (photon_rays, scale) = match Grid::build(&points, &pixels) {
+            // Every rank makes the same visible points and traces its share of the photons
+            // (or runs its share of the chains); the sums are added up over the ranks.
+            let owns = |j: usize| cluster.owns(j);
+            let (photon_rays, visible, recorded) = match Grid::build(&points, &pixels) {
                 Some(grid) => {
                     let targets = Targets { grid: &grid, points: &points, pixels: &pixels };
                     match &mut chains {
-                        None => (self.uniform_photons(scene, &targets, &sums, seed, iteration, photons), 1.0),
-                        Some(chains) => chains.run(scene, self.max_depth, &targets, &sums, photons),
+                        None => (self.uniform_photons(scene, &targets, &sums, seed, (iteration, photons), &owns), 0, 0),
+                        Some(chains) => chains.run(scene, self.max_depth, (&targets, &sums), photons, &owns),
                     }
                 }
-                None => (0, 1.0),
+                None => (0, 0, 0),
             };
-            visible_sum += scale;
+            let sums = if cluster.is_distributed() { sums.summed(cluster) } else { sums };
+            let mut counts = [visible as i64, recorded as i64];
+            cluster.sum(&mut counts);
+            // Uniform photons count whole; the chains' recorded photons are scaled to as many
+            // uniform photons (`photons·V̄/recorded`, `V̄` the uniform photons' visible fraction).
+            let scale = if chains.is_some() { counts[0] as f64 / counts[1].max(1) as f64 } else { 1.0 };
+            visible_sum += counts[0] as f64 / photons.max(1) as f64;
             // Progressive update; the photon sums scaled to photons per iteration.
             let PhotonSums { phi, counts, .. } = sums;
             let phi = phi.image(scale);
@@ -410,6 +434,7 @@ impl SppmIntegrator {
             stats.rays += camera_rays + photon_rays;
             stats.pixel_samples += n as u64;
             render.progress(n as u64);
+            // Every rank holds the same pixel states: no exchange is needed for a snapshot.
             snapshots.take(render, |seconds| RenderOutput {
                 image: develop(&pixels, (w, h), iteration, photons),
                 stats: RenderStats { spp_completed: iteration as u32, seconds, ..stats.clone() },
@@ -418,6 +443,9 @@ impl SppmIntegrator {
             });
         }
         stats.spp_completed = iteration.min(u64::from(u32::MAX)) as u32;
+        let mut rays = [stats.rays as i64];
+        cluster.sum(&mut rays);
+        stats.rays = rays[0] as u64;
         render.finish(&mut stats);
         let chains = chains.map(|c| vec![c.stats(visible_sum / iteration.max(1) as f64)]).unwrap_or_default();
         RenderOutput { image: develop(&pixels, (w, h), iteration, photons), stats, layers: Vec::new(), chains }

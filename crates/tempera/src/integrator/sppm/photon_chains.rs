@@ -16,10 +16,12 @@
 //!    `a` 1 for an accepted and 0 for a rejected one (a diminishing adaptation).
 //! 3. **Recording.** The chain's current state deposits its photon.
 //!
-//! Over `N` steps the chains' deposits, scaled by `V̄`, estimate what `N` uniform photons would
-//! deposit: `∫c(u)du = ∫V·(c/V)du ≈ V̄·(1/N)·Σ c(u_i)` for the chain states `u_i` (all visible,
-//! and `c = 0` where `V = 0`). When the visible points move (a new SPPM iteration), a chain first
-//! re-traces its state; a state that is invisible under the new points accepts any proposal.
+//! Over `N` recorded steps the chains' deposits estimate `∫c(u)du = ∫V·(c/V)du ≈ V̄·(1/N)·Σ
+//! c(u_i)` for the chain states `u_i` (all visible, and `c = 0` where `V = 0`): scaled by
+//! `P·V̄/N`, what `P` uniform photons would deposit. When the visible points move (a new SPPM
+//! iteration), a chain first re-traces its state; a state that is invisible under the new points
+//! accepts any proposal, and the chain's steps are not recorded until it is visible again (a
+//! burn-in: counting them would darken the estimate).
 
 use super::{PhotonSums, Targets, trace_photon};
 use crate::math::Rgb;
@@ -38,7 +40,8 @@ pub type Deposits = Vec<(u32, Rgb)>;
 pub struct PhotonChain {
     sampler: PssSampler,
     deposits: Deposits,
-    visible: bool,
+    /// Whether the current state reaches a visible point.
+    pub visible: bool,
     /// The mutation size.
     pub sigma: f32,
     pub mutations: u64,
@@ -142,42 +145,48 @@ impl PhotonChains {
         Self { chains: (0..chains.max(1)).map(|c| PhotonChain::new(seed, c as u64)).collect() }
     }
 
-    /// `photons` steps in all, shared among the chains, each chain's current photon added to
-    /// `sums` after every step. Returns the rays traced and the scale that makes the sums an
-    /// estimate of `photons` uniform photons' sums (the uniform photons' visible fraction).
+    /// `photons` steps in all, shared among the chains (those `owns` says this process runs),
+    /// each chain's current photon added to `sums` after every step at which it is visible.
+    /// Returns the rays traced, how many of the uniform photons were visible and how many steps
+    /// were recorded: `visible / recorded` scales the sums to an estimate of `photons` uniform
+    /// photons' sums (`photons·V̄` over the recorded steps).
     pub fn run(
         &mut self,
         scene: &Scene,
         max_depth: u32,
-        targets: &Targets,
-        sums: &PhotonSums,
+        (targets, sums): (&Targets, &PhotonSums),
         photons: u64,
-    ) -> (u64, f64) {
+        owns: &(dyn Fn(usize) -> bool + Sync),
+    ) -> (u64, u64, u64) {
         let c = self.chains.len() as u64;
-        let (rays, visible) = self
-            .chains
+        self.chains
             .par_iter_mut()
             .enumerate()
+            .filter(|(j, _)| owns(*j))
             .map(|(j, chain)| {
                 let steps = photons / c + u64::from((j as u64) < photons % c);
                 let mut eval = |sampler: &mut PssSampler, out: &mut Deposits| {
                     trace_photon(scene, max_depth, targets, sampler, &mut |i, v| out.push((i as u32, v)))
                 };
                 let mut rays = chain.refresh(&mut eval);
-                let mut visible = 0u64;
+                let (mut visible, mut recorded) = (0u64, 0u64);
                 let mut scratch = Deposits::new();
                 for _ in 0..steps {
                     let outcome = chain.step(&mut eval, &mut scratch);
                     rays += outcome.rays;
                     visible += u64::from(outcome.uniform_visible);
-                    for &(i, v) in chain.deposits() {
-                        sums.add(i as usize, v);
+                    // A chain whose state is not visible (it has not found the new visible
+                    // points yet) is still burning in: its steps are not recorded.
+                    if chain.visible {
+                        recorded += 1;
+                        for &(i, v) in chain.deposits() {
+                            sums.add(i as usize, v);
+                        }
                     }
                 }
-                (rays, visible)
+                (rays, visible, recorded)
             })
-            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-        (rays, visible as f64 / photons.max(1) as f64)
+            .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2))
     }
 
     /// The chains' statistics as one row: steps as mutations, uniform photons offered and

@@ -1,0 +1,97 @@
+//! One render across MPI ranks (with the `mpi` feature): `mpirun -np 2` and `-np 3` give the
+//! same image, byte for byte, as a single process for every integrator at a fixed budget; a
+//! scene that fails to load stops every rank with one clear error. Skipped, with a message,
+//! when `mpirun` is missing.
+#![cfg(feature = "mpi")]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tempera-mpi-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn have_mpirun() -> bool {
+    let found = Command::new("mpirun").arg("--version").output().is_ok_and(|o| o.status.success());
+    if !found {
+        eprintln!("skipped: mpirun not found (install openmpi-bin)");
+    }
+    found
+}
+
+/// `tempera ARGS` in one process, or under `mpirun -np ranks`.
+fn tempera(dir: &Path, ranks: Option<usize>, args: &[&str]) -> Output {
+    let bin = env!("CARGO_BIN_EXE_tempera");
+    let mut cmd = match ranks {
+        None => Command::new(bin),
+        Some(n) => {
+            let mut c = Command::new("mpirun");
+            c.args(["--allow-run-as-root", "--oversubscribe", "-np", &n.to_string(), bin]);
+            c
+        }
+    };
+    cmd.current_dir(dir).args(args).output().unwrap()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn ranks_render_the_single_process_image_byte_for_byte() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = scratch("identical");
+    let common = ["--resolution", "40x30", "--seed", "5", "--threads", "1", "--quiet"];
+    let runs: [(&str, &[&str]); 6] = [
+        ("path", &["--spp", "6"]),
+        ("bdpt", &["--spp", "3"]),
+        ("mmlt", &["--mpp", "4", "--bootstrap", "4000"]),
+        ("pssmlt", &["--mpp", "4", "--bootstrap", "4000"]),
+        ("tempered", &["--mpp", "3", "--bootstrap", "4000"]),
+        ("sppm", &["--spp", "3", "--photons", "3000", "--radius", "0.1"]),
+    ];
+    for (integrator, budget) in runs {
+        let mut images = Vec::new();
+        for ranks in [None, Some(2), Some(3)] {
+            let name = format!("{integrator}-{}.exr", ranks.unwrap_or(1));
+            let mut args = vec!["render", "--integrator", integrator, "-o", &name, "--stats", "stats.json"];
+            args.extend_from_slice(budget);
+            args.extend_from_slice(&common);
+            let out = tempera(&dir, ranks, &args);
+            assert!(out.status.success(), "{integrator} on {ranks:?} ranks: {}", stderr(&out));
+            images.push(std::fs::read(dir.join(&name)).unwrap());
+            let stats: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(dir.join("stats.json")).unwrap()).unwrap();
+            assert_eq!(stats["ranks"].as_u64().unwrap_or(1), ranks.unwrap_or(1) as u64, "{integrator}: {stats}");
+        }
+        assert!(images[0] == images[1], "{integrator}: 2 ranks differ from one process");
+        assert!(images[0] == images[2], "{integrator}: 3 ranks differ from one process");
+    }
+}
+
+#[test]
+fn a_scene_no_rank_can_load_stops_every_rank_with_one_error() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = scratch("missing");
+    let out = tempera(&dir, Some(2), &["render", "no-such-scene.pbrt", "--quiet"]);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert_eq!(err.matches("no-such-scene.pbrt").count(), 1, "one message, from rank 0: {err}");
+}
+
+#[test]
+fn other_commands_refuse_to_run_across_ranks() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = scratch("info");
+    let out = tempera(&dir, Some(2), &["info"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("only `tempera render`"), "{}", stderr(&out));
+}
