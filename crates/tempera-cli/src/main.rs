@@ -28,10 +28,11 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    // Built with MPI, every process of an `mpirun` shares each render; MPI is finalised when
-    // `_universe` is dropped, at the end.
+    // Built with MPI and started by a launcher (`mpirun`, `srun`), every process shares each
+    // render; MPI is finalised when `_mpi` is dropped, at the end. Started directly, the
+    // process renders alone and never initialises MPI.
     #[cfg(feature = "mpi")]
-    let (_universe, mpi) = match tempera_cli::mpi::initialise() {
+    let _mpi = match tempera_cli::mpi::launched().then(tempera_cli::mpi::initialise).transpose() {
         Ok(m) => m,
         Err(e) => {
             eprintln!("error: {e:#}");
@@ -39,7 +40,10 @@ fn main() -> ExitCode {
         }
     };
     #[cfg(feature = "mpi")]
-    let cluster: &dyn Cluster = &mpi;
+    let cluster: &dyn Cluster = match &_mpi {
+        Some((_, mpi)) => mpi,
+        None => &tempera::cluster::SOLO,
+    };
     #[cfg(not(feature = "mpi"))]
     let cluster: &dyn Cluster = &tempera::cluster::SOLO;
     let result = match cli.command {

@@ -23,8 +23,13 @@ pub struct MpiCluster {
 unsafe impl Sync for MpiCluster {}
 unsafe impl Send for MpiCluster {}
 
-/// Initialises MPI (a single process when not started by `mpirun`). The universe finalises MPI
-/// when dropped: keep it until the process ends.
+/// True when an MPI launcher started this process (Open MPI's `mpirun`, a PMI or PMIx process
+/// manager such as Slurm's `srun` or MPICH's Hydra): only then is MPI initialised.
+pub fn launched() -> bool {
+    ["OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"].iter().any(|v| std::env::var_os(v).is_some())
+}
+
+/// Initialises MPI. The universe finalises MPI when dropped: keep it until the process ends.
 pub fn initialise() -> anyhow::Result<(mpi::environment::Universe, MpiCluster)> {
     let (universe, threading) = mpi::initialize_with_threading(mpi::Threading::Serialized)
         .ok_or_else(|| anyhow::anyhow!("MPI could not be initialised"))?;
