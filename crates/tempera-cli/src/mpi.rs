@@ -1,6 +1,8 @@
 //! The processes of an `mpirun` (with the `mpi` feature: rsmpi over Open MPI) as the core's
 //! [`Cluster`]: gathers at rank 0 (sizes first, then the bytes), rank 0's decisions broadcast,
-//! and exact integer sums (`MPI_Allreduce` with `MPI_SUM` on 64-bit integers).
+//! and exact integer sums (`MPI_Allreduce` with `MPI_SUM` on 64-bit integers). It counts the
+//! bytes each rank hands to MPI (the payload: an all-reduce's implementation moves a small
+//! multiple of it).
 //!
 //! MPI is initialised with `MPI_THREAD_SERIALIZED`: the render loops call it from whichever
 //! worker thread runs them, never from two threads at once.
@@ -9,6 +11,7 @@ use mpi::collective::SystemOperation;
 use mpi::datatype::PartitionMut;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 use tempera::cluster::Cluster;
 
 /// The world communicator of this `mpirun`.
@@ -16,6 +19,8 @@ pub struct MpiCluster {
     world: SimpleCommunicator,
     rank: usize,
     size: usize,
+    /// Bytes this rank has handed to MPI calls.
+    sent: AtomicU64,
 }
 
 // SAFETY: MPI is initialised with MPI_THREAD_SERIALIZED and the render loops make their
@@ -38,7 +43,7 @@ pub fn initialise() -> anyhow::Result<(mpi::environment::Universe, MpiCluster)> 
     }
     let world = universe.world();
     let (rank, size) = (world.rank() as usize, world.size() as usize);
-    Ok((universe, MpiCluster { world, rank, size }))
+    Ok((universe, MpiCluster { world, rank, size, sent: AtomicU64::new(0) }))
 }
 
 impl Cluster for MpiCluster {
@@ -56,6 +61,7 @@ impl Cluster for MpiCluster {
         // byte, dropped at rank 0.
         bytes.insert(0, 1);
         let n = bytes.len() as u64;
+        self.sent.fetch_add(8 + n, Ordering::Relaxed);
         if self.rank != 0 {
             root.gather_into(&n);
             root.gather_varcount_into(&bytes[..]);
@@ -89,13 +95,19 @@ impl Cluster for MpiCluster {
     }
 
     fn broadcast(&self, value: bool) -> bool {
+        self.sent.fetch_add(1, Ordering::Relaxed);
         let mut v = u8::from(value);
         self.world.process_at_rank(0).broadcast_into(&mut v);
         v != 0
     }
 
     fn sum(&self, values: &mut [i64]) {
+        self.sent.fetch_add(8 * values.len() as u64, Ordering::Relaxed);
         let send = values.to_vec();
         self.world.all_reduce_into(&send[..], values, SystemOperation::sum());
+    }
+
+    fn bytes_sent(&self) -> u64 {
+        self.sent.load(Ordering::Relaxed)
     }
 }

@@ -184,9 +184,15 @@ pub fn run_on(args: RenderArgs, cluster: &dyn Cluster) -> Result<()> {
     let job =
         Job { max_memory: args.max_memory, cluster, ..Job::new(&scene, integrator.as_ref(), render_settings, quiet) };
     let out = job.run()?;
+    let traffic = cluster.gather(cluster.bytes_sent().to_le_bytes().to_vec());
     if !root {
         return Ok(());
     }
+    let bytes_sent: Vec<u64> = if cluster.is_distributed() {
+        traffic.iter().map(|b| u64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]))).collect()
+    } else {
+        Vec::new()
+    };
 
     let options = WriteOptions { exposure: args.exposure };
     for path in &outputs {
@@ -198,7 +204,7 @@ pub fn run_on(args: RenderArgs, cluster: &dyn Cluster) -> Result<()> {
             write_image(&dir.join(format!("{name}.exr")), layer, &options)?;
         }
     }
-    let stats = RunStats { ranks: cluster.size(), ..RunStats::new(integrator.name(), &out) };
+    let stats = RunStats { ranks: cluster.size(), bytes_sent, ..RunStats::new(integrator.name(), &out) };
     if !args.quiet {
         summary(&args, &scene, integrator.name(), &out.stats, &outputs, !out.chains.is_empty());
         crate::stats::print_table(&stats);

@@ -16,6 +16,10 @@ pub trait Cluster: Sync {
     fn broadcast(&self, value: bool) -> bool;
     /// Replaces `values` on every rank by their element-wise sums over the ranks.
     fn sum(&self, values: &mut [i64]);
+    /// Bytes this rank has handed to the exchanges so far (gathers, broadcasts, sums).
+    fn bytes_sent(&self) -> u64 {
+        0
+    }
 }
 
 impl dyn Cluster + '_ {

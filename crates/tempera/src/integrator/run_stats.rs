@@ -24,6 +24,9 @@ pub struct RunStats {
     /// Processes (MPI ranks) the render was shared among; written only when more than one.
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub ranks: usize,
+    /// Per rank, the bytes it handed to the exchanges between ranks; empty for one process.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bytes_sent: Vec<u64>,
 }
 
 fn one() -> usize {
@@ -222,6 +225,7 @@ impl RunStats {
             mutations_per_second: mutations as f64 / s.seconds.max(1e-9),
             depths: out.chains.iter().map(DepthRecord::new).collect(),
             ranks: 1,
+            bytes_sent: Vec::new(),
         }
     }
 }
