@@ -48,16 +48,18 @@ fn main() -> ExitCode {
     let cluster: &dyn Cluster = &tempera::cluster::SOLO;
     let result = match cli.command {
         Command::Render(args) => render::run_on(*args, cluster),
+        Command::Experiment(args) => experiment::run_on(args, cluster),
         _ if cluster.is_distributed() => {
             if cluster.is_root() {
-                Err(anyhow::anyhow!("only `tempera render` shares its work among MPI ranks; run this in one process"))
+                Err(anyhow::anyhow!(
+                    "only `tempera render` and `tempera experiment` share their work among MPI ranks; run this in one process"
+                ))
             } else {
                 Err(render::Reported.into())
             }
         }
         Command::Info(args) => info::run(args),
         Command::Compare(args) => compare::run(args),
-        Command::Experiment(args) => experiment::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

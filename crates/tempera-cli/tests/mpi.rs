@@ -93,5 +93,59 @@ fn other_commands_refuse_to_run_across_ranks() {
     let dir = scratch("info");
     let out = tempera(&dir, Some(2), &["info"]);
     assert!(!out.status.success());
-    assert!(stderr(&out).contains("only `tempera render`"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("only `tempera render` and `tempera experiment`"), "{}", stderr(&out));
+}
+
+/// An experiment across 2 ranks: the reference (a fixed budget) is rendered by both ranks and
+/// is the single process's byte for byte; every run is done once, by one rank; rank 0 writes
+/// the same rows (scenes, methods, seeds, times) as a single process, and a second invocation
+/// finds every run finished.
+#[test]
+fn an_experiment_across_ranks_renders_its_reference_together_and_deals_its_runs() {
+    if !have_mpirun() {
+        return;
+    }
+    let config = r#"
+output = "out"
+threads = 1
+[reference]
+method = "bdpt"
+spp = 8
+[[scene]]
+name = "default"
+resolution = "24x24"
+maxdepth = 4
+[[method]]
+name = "path"
+integrator = "path"
+[[method]]
+name = "mmlt"
+integrator = "mmlt"
+settings = { bootstrap = 2000, chains = 8 }
+[budget]
+seconds = [0.3]
+seeds = [1, 2, 3]
+"#;
+    let (one, two) = (scratch("experiment-1"), scratch("experiment-2"));
+    for dir in [&one, &two] {
+        std::fs::write(dir.join("e.toml"), config).unwrap();
+    }
+    let single = tempera(&one, None, &["experiment", "e.toml", "-q"]);
+    assert!(single.status.success(), "{}", stderr(&single));
+    let ranks = tempera(&two, Some(2), &["experiment", "e.toml", "-q"]);
+    assert!(ranks.status.success(), "{}", stderr(&ranks));
+    let reference = |d: &Path| std::fs::read(d.join("out/reference/default.exr")).unwrap();
+    assert!(reference(&one) == reference(&two), "the reference differs from one process's");
+    let rows = |d: &Path| {
+        let text = std::fs::read_to_string(d.join("out/results.csv")).unwrap();
+        let mut keys: Vec<String> =
+            text.lines().skip(1).map(|l| l.split(',').take(4).collect::<Vec<_>>().join(",")).collect();
+        keys.sort();
+        keys
+    };
+    assert_eq!(rows(&one), rows(&two));
+    assert_eq!(rows(&two).len(), 6);
+    let again = tempera(&two, Some(2), &["experiment", "e.toml", "-q"]);
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert_eq!(stderr(&again).matches("finished earlier").count(), 6, "{}", stderr(&again));
 }

@@ -2,7 +2,8 @@
 //! reference, recording each run's image at every budget and snapshot time, and writes
 //! `results.csv`, `results.json`, the images and `report.html` into one output folder.
 //!
-//! Every run gets all threads and runs alone. A run's record (`runs/SCENE/METHOD/seed-N.json`)
+//! Every run gets all threads and runs alone (under `mpirun`, one rank's threads; the runs are
+//! dealt among the ranks: [`run_on`]). A run's record (`runs/SCENE/METHOD/seed-N.json`)
 //! is written when it finishes; a later invocation skips runs whose record exists and still
 //! describes the same run (method, scene, resolution, times, reference), so an interrupted
 //! experiment resumes where it stopped. References are cached the same way.
@@ -17,6 +18,7 @@ mod scenes;
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
+use tempera::cluster::Cluster;
 
 pub use config::Config;
 
@@ -42,49 +44,78 @@ pub(crate) fn create_folder(folder: &std::path::Path) -> Result<()> {
 }
 
 pub fn run(args: ExperimentArgs) -> Result<()> {
+    run_on(args, &tempera::cluster::SOLO)
+}
+
+/// Runs the experiment with the processes of `cluster` (MPI ranks sharing a file system): every
+/// reference is rendered once, by all ranks together (rank 0 writes it); the runs are dealt
+/// round-robin, each on one rank's threads (equal time stays equal resources), each rank
+/// writing the records of its runs; rank 0 then reads every record and writes the results and
+/// the report. A rank that dies loses its unfinished run only: the next invocation skips every
+/// finished one, whichever rank wrote it.
+pub fn run_on(args: ExperimentArgs, cluster: &dyn Cluster) -> Result<()> {
+    let root = cluster.is_root();
     let config = Config::load(&args.config)?;
     create_folder(&config.output)?;
-    let stale = tempera_image::remove_stale_partials(&config.output);
-    if stale > 0 {
-        eprintln!(
-            "removed {stale} temporary file(s) that an interrupted experiment left in {}",
-            config.output.display()
-        );
+    if root {
+        let stale = tempera_image::remove_stale_partials(&config.output);
+        if stale > 0 {
+            eprintln!(
+                "removed {stale} temporary file(s) that an interrupted experiment left in {}",
+                config.output.display()
+            );
+        }
     }
+    // The other ranks write nothing before rank 0 has cleaned up.
+    cluster.broadcast(true);
     if args.handle_interrupts {
         crate::run::install_interrupt_handler();
     }
     let scenes = scenes::prepare_scenes(&config)?;
-    let mut records = Vec::new();
+    let quiet = args.quiet || !root;
     let mut references = Vec::new();
-    let total = scenes.len() * config.methods.len() * config.budget.seeds.len();
-    let mut index = 0;
     for scene in &scenes {
         let reference = if args.report_only {
             reference::cached(&config, scene)?
         } else {
-            Some(reference::obtain(&config, scene, args.quiet)?)
+            Some(reference::obtain(&config, scene, quiet, cluster)?)
         };
-        let Some(reference) = reference else {
+        if reference.is_none() && root {
             eprintln!("{}: no reference yet; skipped in the report", scene.entry.name);
-            continue;
-        };
+        }
+        references.push(reference);
+    }
+    let total = scenes.len() * config.methods.len() * config.budget.seeds.len();
+    let mut jobs = Vec::new();
+    for (scene, reference) in scenes.iter().zip(&references) {
+        let Some(reference) = reference else { continue };
         for method in &scene.methods {
             for &seed in &config.budget.seeds {
-                index += 1;
-                let job = runs::Job { config: &config, scene, method, seed, reference: &reference };
-                let record = if args.report_only {
-                    job.existing()
-                } else if crate::run::cancelled() {
-                    None
-                } else {
-                    job.existing_or_run(index, total, args.quiet)?
-                };
-                records.extend(record);
+                jobs.push(runs::Job { config: &config, scene, method, seed, reference });
             }
         }
-        references.push((scene.entry.name.clone(), reference.image));
     }
+    let mut records = Vec::new();
+    for (i, job) in jobs.iter().enumerate() {
+        let record = if args.report_only {
+            job.existing()
+        } else if !cluster.owns(i) || crate::run::cancelled() {
+            None
+        } else {
+            job.existing_or_run(i + 1, total, args.quiet)?
+        };
+        records.extend(record);
+    }
+    if cluster.is_distributed() {
+        // Every rank's records are written; rank 0 reads them all.
+        cluster.broadcast(true);
+        if !root {
+            return Ok(());
+        }
+        records = jobs.iter().filter_map(runs::Job::existing).collect();
+    }
+    let references: Vec<_> =
+        scenes.iter().zip(references).filter_map(|(scene, r)| r.map(|r| (scene.entry.name.clone(), r.image))).collect();
     let rows: Vec<&runs::Row> = records.iter().flat_map(|r| &r.rows).collect();
     runs::write_results(&config, &rows)?;
     let path = report::write(&config, &scenes, &records, &references)?;

@@ -8,6 +8,7 @@ use crate::run::Job;
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
 use std::time::Duration;
+use tempera::cluster::Cluster;
 use tempera::integrator::{Budget, IntegratorKind, RenderSettings};
 use tempera::texture::Image;
 use tempera_image::{ColorEncoding, WriteOptions, read_image, write_image};
@@ -107,19 +108,40 @@ pub fn cached(config: &Config, scene: &PreparedScene) -> Result<Option<Reference
     Ok(None)
 }
 
-/// The reference of `scene`, rendering (and caching) it when needed.
-pub fn obtain(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Reference> {
-    let reference = match cached(config, scene)? {
-        Some(r) => r,
-        None => render(config, scene, quiet)?,
+/// The reference of `scene`, rendering (and caching) it when needed: by every rank of
+/// `cluster` together, rank 0 writing it; the other ranks then read what rank 0 wrote.
+pub fn obtain(config: &Config, scene: &PreparedScene, quiet: bool, cluster: &dyn Cluster) -> Result<Reference> {
+    let cached = cached(config, scene)?;
+    // Rank 0 decides whether the reference is to be rendered.
+    let reference = if cluster.broadcast(cached.is_none()) {
+        let rendered = render(config, scene, quiet, cluster)?;
+        // Rank 0 has written it.
+        cluster.broadcast(true);
+        if cluster.is_root() { Some(rendered) } else { cached_written(config, scene)? }
+    } else {
+        cached
     };
-    let (_, _, png) = paths(config, scene);
-    super::create_folder(png.parent().expect("reference paths have a folder"))?;
-    write_image(&png, &reference.image, &WriteOptions::default())?;
+    let Some(reference) = reference else {
+        bail!(
+            "scene '{}': the reference rank 0 has is not readable here (experiments across ranks need \
+             a file system all ranks share)",
+            scene.entry.name
+        );
+    };
+    if cluster.is_root() {
+        let (_, _, png) = paths(config, scene);
+        super::create_folder(png.parent().expect("reference paths have a folder"))?;
+        write_image(&png, &reference.image, &WriteOptions::default())?;
+    }
     Ok(reference)
 }
 
-fn render(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Reference> {
+/// The cached reference once rank 0 has written it.
+fn cached_written(config: &Config, scene: &PreparedScene) -> Result<Option<Reference>> {
+    cached(config, scene)
+}
+
+fn render(config: &Config, scene: &PreparedScene, quiet: bool, cluster: &dyn Cluster) -> Result<Reference> {
     let r = &config.reference;
     let method = r.method.unwrap_or(IntegratorKind::Bdpt);
     let integrator = tempera::integrator::create(method, &r.settings, &scene.scene.defaults)
@@ -133,19 +155,25 @@ fn render(config: &Config, scene: &PreparedScene, quiet: bool) -> Result<Referen
         Budget::Samples(spp) => format!("{spp} spp"),
         Budget::Time(d) => format!("{} s", d.as_secs_f64()),
     };
-    eprintln!("scene '{}': rendering the reference with {method}, {what}", scene.entry.name);
+    let root = cluster.is_root();
+    if root {
+        eprintln!("scene '{}': rendering the reference with {method}, {what}", scene.entry.name);
+    }
     let settings = RenderSettings { budget, seed: r.seed.unwrap_or(DEFAULT_SEED), threads: config.threads };
-    let out = Job { label: Some(&label), ..Job::new(&scene.scene, integrator.as_ref(), settings, quiet) }
+    let out = Job { label: Some(&label), cluster, ..Job::new(&scene.scene, integrator.as_ref(), settings, quiet) }
         .run()
         .with_context(|| format!("scene '{}': reference", scene.entry.name))?;
     if out.stats.cancelled {
         bail!("interrupted while rendering the reference of '{}' (nothing cached)", scene.entry.name);
     }
+    let key = key(config, scene);
+    if !root {
+        return Ok(Reference { image: out.image, key });
+    }
     eprintln!("scene '{}': reference rendered in {:.1} s", scene.entry.name, out.stats.seconds);
     let (exr, json, _) = paths(config, scene);
     super::create_folder(exr.parent().expect("reference paths have a folder"))?;
     write_image(&exr, &out.image, &WriteOptions::default())?;
-    let key = key(config, scene);
     tempera_image::write_file_atomically(&json, serde_json::to_string_pretty(&key).expect("keys serialise").as_bytes())
         .with_context(|| format!("cannot write {}", json.display()))?;
     Ok(Reference { image: out.image, key })
