@@ -149,3 +149,33 @@ seeds = [1, 2, 3]
     assert!(again.status.success(), "{}", stderr(&again));
     assert_eq!(stderr(&again).matches("finished earlier").count(), 6, "{}", stderr(&again));
 }
+
+/// Ctrl-C on `mpirun` (which passes it on to the ranks as a termination signal) writes the
+/// image rendered so far, as a single process does.
+#[test]
+fn interrupting_mpirun_writes_the_image_so_far() {
+    if !have_mpirun() {
+        return;
+    }
+    use std::os::unix::process::CommandExt;
+    let dir = scratch("interrupt");
+    let bin = env!("CARGO_BIN_EXE_tempera");
+    // In a process group of its own: what mpirun signals on an interrupt must not reach the
+    // other tests' processes.
+    let child = Command::new("mpirun")
+        .process_group(0)
+        .args(["--allow-run-as-root", "--oversubscribe", "-np", "2", bin, "render", "--integrator", "mmlt"])
+        .args(["--time", "60", "--resolution", "32x32", "--threads", "1", "--quiet", "-o", "so-far.exr"])
+        .current_dir(&dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_secs(5));
+    let start = std::time::Instant::now();
+    Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(start.elapsed().as_secs() < 30, "mpirun stopped long after the interrupt");
+    let image = tempera_image::read_image(&dir.join("so-far.exr"), tempera_image::ColorEncoding::Linear)
+        .unwrap_or_else(|e| panic!("no image after the interrupt ({e}): {}", stderr(&out)));
+    assert!(image.pixels.iter().any(|p| p.max_element() > 0.0), "the image so far is black");
+}

@@ -33,6 +33,13 @@ impl dyn Cluster + '_ {
         self.size() > 1
     }
 
+    /// Returns on every rank once every rank has called it (a broadcast alone does not wait:
+    /// rank 0 may leave it before the others arrive).
+    pub fn barrier(&self) {
+        self.gather(Vec::new());
+        self.broadcast(true);
+    }
+
     /// Whether this rank does item `i` of work dealt round-robin.
     pub fn owns(&self, i: usize) -> bool {
         i % self.size() == self.rank()

@@ -107,8 +107,8 @@ pub fn run_on(args: ExperimentArgs, cluster: &dyn Cluster) -> Result<()> {
         records.extend(record);
     }
     if cluster.is_distributed() {
-        // Every rank's records are written; rank 0 reads them all.
-        cluster.broadcast(true);
+        // Once every rank's records are written, rank 0 reads them all.
+        cluster.barrier();
         if !root {
             return Ok(());
         }
