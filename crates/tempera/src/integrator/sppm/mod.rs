@@ -447,7 +447,29 @@ impl SppmIntegrator {
         cluster.sum(&mut rays);
         stats.rays = rays[0] as u64;
         render.finish(&mut stats);
-        let chains = chains.map(|c| vec![c.stats(visible_sum / iteration.max(1) as f64)]).unwrap_or_default();
+        // The chains' counts, added up over the ranks that ran them.
+        let chains = chains
+            .map(|c| {
+                let mut d = c.stats(visible_sum / iteration.max(1) as f64);
+                let mut counts = [
+                    d.mutations,
+                    d.large_steps_proposed,
+                    d.large_steps_accepted,
+                    d.small_steps_proposed,
+                    d.small_steps_accepted,
+                ]
+                .map(|v| v as i64);
+                cluster.sum(&mut counts);
+                [
+                    d.mutations,
+                    d.large_steps_proposed,
+                    d.large_steps_accepted,
+                    d.small_steps_proposed,
+                    d.small_steps_accepted,
+                ] = counts.map(|v| v as u64);
+                vec![d]
+            })
+            .unwrap_or_default();
         RenderOutput { image: develop(&pixels, (w, h), iteration, photons), stats, layers: Vec::new(), chains }
     }
 }
