@@ -60,6 +60,11 @@ def test_loaded_scene_reports_its_contents_and_warnings():
             ["--mpp", "2", "--bootstrap", "3000", "--replicas", "3", "--swap", "equi-energy"],
             {"mpp": 2, "bootstrap": 3000, "replicas": 3, "swap": "equi-energy"},
         ),
+        (
+            "sppm",
+            ["--spp", "2", "--photons", "2000", "--radius", "0.1", "--photon-sampler", "mcmc"],
+            {"spp": 2, "photons": 2000, "radius": 0.1, "photon_sampler": "mcmc"},
+        ),
     ],
 )
 def test_same_pixels_as_the_command_line(tmp_path, integrator, flags, kwargs):
