@@ -7,6 +7,7 @@ mod directives;
 mod lexer;
 mod lights;
 mod materials;
+mod media;
 mod params;
 mod shapes;
 
