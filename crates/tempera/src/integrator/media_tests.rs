@@ -35,6 +35,36 @@ fn slab(medium: Medium) -> crate::scene::Scene {
     b.build().unwrap()
 }
 
+/// A unit sphere of non-absorbing chromatic medium (asymmetry `g`) bounded by an interface,
+/// under a uniform sky of radiance 1, seen whole.
+fn medium_sphere_under_sky(g: f32) -> crate::scene::Scene {
+    let mut b = SceneBuilder::new();
+    let interface = b.add_material(Material::Interface);
+    let m = b.add_medium(Medium { sigma_a: Rgb::ZERO, sigma_s: Rgb::new(0.5, 1.0, 2.0), g });
+    b.add_shape(Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, reverse_orientation: false }), interface, None);
+    b.set_shape_medium(0, MediumInterface { inside: Some(m), outside: None });
+    b.add_light(Light::Infinite(InfiniteLight::uniform(Rgb::ONE)));
+    b.set_camera(CameraDesc::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 30.0));
+    b.set_film(FilmDesc { width: 16, height: 16, ..FilmDesc::default() });
+    b.build().unwrap()
+}
+
+/// Asserts each channel's pixel mean is `expected(c)` within four standard errors plus
+/// `slack(expected)`.
+fn assert_channel_means(
+    name: &str,
+    image: &crate::texture::Image,
+    expected: impl Fn(usize) -> f64,
+    slack: impl Fn(f64) -> f64,
+) {
+    for c in 0..3 {
+        let values: Vec<f64> = image.pixels.iter().map(|p| f64::from(p[c])).collect();
+        let (mean, se) = mean_and_se(&values);
+        let e = expected(c);
+        assert!((mean - e).abs() < 4.0 * se + slack(e), "{name}, channel {c}: {mean} ± {se}, expected {e}");
+    }
+}
+
 /// Seen through a purely absorbing slab of thickness 2, the emitter's radiance is
 /// `exp(−2σa/cos θ)` per channel; a scattering-only slab lets through `exp(−2σs/cos θ)`
 /// directly and more by scattering, never more than the emitter.
@@ -44,15 +74,7 @@ fn a_slab_of_known_optical_depth_transmits_its_analytic_fraction() {
     let scene = slab(Medium { sigma_a, sigma_s: Rgb::ZERO, g: 0.0 });
     let out = render_with(&scene, &PathIntegrator::new(4), Budget::Samples(64), 3, 0);
     // The fov is 8°: 1/cos θ stays below 1.002 over the film.
-    for c in 0..3 {
-        let values: Vec<f64> = out.image.pixels.iter().map(|p| f64::from(p[c])).collect();
-        let (mean, se) = mean_and_se(&values);
-        let expected = f64::from((-2.0 * sigma_a[c]).exp());
-        assert!(
-            (mean - expected).abs() < 4.0 * se + 0.002 * expected,
-            "channel {c}: {mean} ± {se}, expected {expected}"
-        );
-    }
+    assert_channel_means("path, absorbing slab", &out.image, |c| f64::from((-2.0 * sigma_a[c]).exp()), |e| 0.002 * e);
     let scattering = slab(Medium { sigma_a: Rgb::ZERO, sigma_s: Rgb::splat(0.5), g: 0.7 });
     let out = render_with(&scattering, &PathIntegrator::new(50), Budget::Samples(64), 4, 0);
     let values: Vec<f64> = out.image.pixels.iter().map(|p| f64::from(p.y)).collect();
@@ -65,25 +87,9 @@ fn a_slab_of_known_optical_depth_transmits_its_analytic_fraction() {
 #[test]
 fn a_non_absorbing_medium_under_a_uniform_sky_is_the_sky() {
     for g in [0.0f32, 0.6] {
-        let mut b = SceneBuilder::new();
-        let interface = b.add_material(Material::Interface);
-        let m = b.add_medium(Medium { sigma_a: Rgb::ZERO, sigma_s: Rgb::new(0.5, 1.0, 2.0), g });
-        b.add_shape(
-            Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, reverse_orientation: false }),
-            interface,
-            None,
-        );
-        b.set_shape_medium(0, MediumInterface { inside: Some(m), outside: None });
-        b.add_light(Light::Infinite(InfiniteLight::uniform(Rgb::ONE)));
-        b.set_camera(CameraDesc::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 30.0));
-        b.set_film(FilmDesc { width: 16, height: 16, ..FilmDesc::default() });
-        let scene = b.build().unwrap();
+        let scene = medium_sphere_under_sky(g);
         let out = render_with(&scene, &PathIntegrator::new(1000), Budget::Samples(64), 5, 0);
-        for c in 0..3 {
-            let values: Vec<f64> = out.image.pixels.iter().map(|p| f64::from(p[c])).collect();
-            let (mean, se) = mean_and_se(&values);
-            assert!((mean - 1.0).abs() < 4.0 * se + 1e-3, "g {g}, channel {c}: {mean} ± {se}");
-        }
+        assert_channel_means(&format!("path, g {g}"), &out.image, |_| 1.0, |_| 1e-3);
     }
 }
 
@@ -135,30 +141,9 @@ fn bdpt_transmits_the_slab_analytically_and_keeps_the_sky_in_a_non_absorbing_med
     let sigma_a = Rgb::new(0.1, 0.4, 1.0);
     let scene = slab(Medium { sigma_a, sigma_s: Rgb::ZERO, g: 0.0 });
     let out = render_with(&scene, &BdptIntegrator::new(4), Budget::Samples(32), 3, 0);
-    for c in 0..3 {
-        let values: Vec<f64> = out.image.pixels.iter().map(|p| f64::from(p[c])).collect();
-        let (mean, se) = mean_and_se(&values);
-        let expected = f64::from((-2.0 * sigma_a[c]).exp());
-        assert!(
-            (mean - expected).abs() < 4.0 * se + 0.002 * expected,
-            "channel {c}: {mean} ± {se}, expected {expected}"
-        );
-    }
-    let mut b = SceneBuilder::new();
-    let interface = b.add_material(Material::Interface);
-    let m = b.add_medium(Medium { sigma_a: Rgb::ZERO, sigma_s: Rgb::new(0.5, 1.0, 2.0), g: 0.6 });
-    b.add_shape(Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, reverse_orientation: false }), interface, None);
-    b.set_shape_medium(0, MediumInterface { inside: Some(m), outside: None });
-    b.add_light(Light::Infinite(InfiniteLight::uniform(Rgb::ONE)));
-    b.set_camera(CameraDesc::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 30.0));
-    b.set_film(FilmDesc { width: 16, height: 16, ..FilmDesc::default() });
-    let scene = b.build().unwrap();
-    let out = render_with(&scene, &BdptIntegrator::new(100), Budget::Samples(32), 5, 0);
-    for c in 0..3 {
-        let values: Vec<f64> = out.image.pixels.iter().map(|p| f64::from(p[c])).collect();
-        let (mean, se) = mean_and_se(&values);
-        assert!((mean - 1.0).abs() < 4.0 * se + 2e-3, "channel {c}: {mean} ± {se}");
-    }
+    assert_channel_means("bdpt, absorbing slab", &out.image, |c| f64::from((-2.0 * sigma_a[c]).exp()), |e| 0.002 * e);
+    let out = render_with(&medium_sphere_under_sky(0.6), &BdptIntegrator::new(100), Budget::Samples(32), 5, 0);
+    assert_channel_means("bdpt, g 0.6", &out.image, |_| 1.0, |_| 2e-3);
 }
 
 /// BDPT in a scattering medium agrees with the path tracer block by block, and so does the
