@@ -87,11 +87,6 @@ impl Wire {
         self.bytes.extend_from_slice(&v.to_le_bytes());
         self
     }
-    pub fn str(&mut self, s: &str) -> &mut Self {
-        self.u64(s.len() as u64);
-        self.bytes.extend_from_slice(s.as_bytes());
-        self
-    }
 }
 
 /// Reads what [`Wire`] wrote, in the same order.
@@ -118,12 +113,6 @@ impl<'a> Reader<'a> {
     pub fn i128(&mut self) -> i128 {
         i128::from_le_bytes(self.take())
     }
-    pub fn str(&mut self) -> String {
-        let n = self.u64() as usize;
-        let (head, tail) = self.bytes.split_at(n);
-        self.bytes = tail;
-        String::from_utf8_lossy(head).into_owned()
-    }
     pub fn is_empty(&self) -> bool {
         self.bytes.is_empty()
     }
@@ -136,13 +125,12 @@ mod tests {
     #[test]
     fn wire_round_trips_every_bit() {
         let mut w = Wire::default();
-        w.u64(7).f64(-0.0).f64(f64::NAN).i128(-(1i128 << 100)).str("rank 2");
+        w.u64(7).f64(-0.0).f64(f64::NAN).i128(-(1i128 << 100));
         let mut r = Reader::new(&w.bytes);
         assert_eq!(r.u64(), 7);
         assert_eq!(r.f64().to_bits(), (-0.0f64).to_bits());
         assert!(r.f64().is_nan());
         assert_eq!(r.i128(), -(1i128 << 100));
-        assert_eq!(r.str(), "rank 2");
         assert!(r.is_empty());
     }
 }

@@ -111,15 +111,15 @@ pub fn cached(config: &Config, scene: &PreparedScene) -> Result<Option<Reference
 /// The reference of `scene`, rendering (and caching) it when needed: by every rank of
 /// `cluster` together, rank 0 writing it; the other ranks then read what rank 0 wrote.
 pub fn obtain(config: &Config, scene: &PreparedScene, quiet: bool, cluster: &dyn Cluster) -> Result<Reference> {
-    let cached = cached(config, scene)?;
+    let found = cached(config, scene)?;
     // Rank 0 decides whether the reference is to be rendered.
-    let reference = if cluster.broadcast(cached.is_none()) {
+    let reference = if cluster.broadcast(found.is_none()) {
         let rendered = render(config, scene, quiet, cluster)?;
         // Rank 0 has written it.
         cluster.broadcast(true);
-        if cluster.is_root() { Some(rendered) } else { cached_written(config, scene)? }
+        if cluster.is_root() { Some(rendered) } else { cached(config, scene)? }
     } else {
-        cached
+        found
     };
     let Some(reference) = reference else {
         bail!(
@@ -134,11 +134,6 @@ pub fn obtain(config: &Config, scene: &PreparedScene, quiet: bool, cluster: &dyn
         write_image(&png, &reference.image, &WriteOptions::default())?;
     }
     Ok(reference)
-}
-
-/// The cached reference once rank 0 has written it.
-fn cached_written(config: &Config, scene: &PreparedScene) -> Result<Option<Reference>> {
-    cached(config, scene)
 }
 
 fn render(config: &Config, scene: &PreparedScene, quiet: bool, cluster: &dyn Cluster) -> Result<Reference> {

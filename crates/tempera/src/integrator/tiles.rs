@@ -205,14 +205,25 @@ fn merged_splats(cluster: &dyn Cluster, buffers: &[Mutex<ThreadBuffers>], (sw, s
     for buffers in buffers {
         splats.merge(&buffers.lock().unwrap_or_else(std::sync::PoisonError::into_inner).splats);
     }
-    if cluster.is_distributed() {
-        let mut w = Wire::default();
-        splats.encode(&mut w);
-        for bytes in cluster.gather(w.bytes).iter().skip(1) {
-            splats.merge_encoded(&mut Reader::new(bytes));
+    sum_at_root(cluster, std::slice::from_mut(&mut splats));
+    splats
+}
+
+/// Adds every other rank's `buffers` to rank 0's (fixed point: exact in any order).
+fn sum_at_root(cluster: &dyn Cluster, buffers: &mut [SplatBuffer]) {
+    if !cluster.is_distributed() {
+        return;
+    }
+    let mut w = Wire::default();
+    for b in buffers.iter() {
+        b.encode(&mut w);
+    }
+    for bytes in cluster.gather(w.bytes).iter().skip(1) {
+        let mut r = Reader::new(bytes);
+        for b in buffers.iter_mut() {
+            b.merge_encoded(&mut r);
         }
     }
-    splats
 }
 
 /// The image of `film` plus the splats so far, which estimate the image per sample.
@@ -303,22 +314,11 @@ pub fn render_tiles<E: PixelEstimator>(
             break;
         }
     }
-    let ThreadBuffers { mut splats, mut layers, .. } =
-        ThreadBuffers::merged(thread_buffers, (sw, sh), layer_count, (fw, fh));
-    if cluster.is_distributed() {
-        let mut w = Wire::default();
-        splats.encode(&mut w);
-        for layer in &layers {
-            layer.encode(&mut w);
-        }
-        for bytes in cluster.gather(w.bytes).iter().skip(1) {
-            let mut r = Reader::new(bytes);
-            splats.merge_encoded(&mut r);
-            for layer in &mut layers {
-                layer.merge_encoded(&mut r);
-            }
-        }
-    }
+    let ThreadBuffers { splats, layers, .. } = ThreadBuffers::merged(thread_buffers, (sw, sh), layer_count, (fw, fh));
+    let mut all: Vec<SplatBuffer> = std::iter::once(splats).chain(layers).collect();
+    sum_at_root(cluster, &mut all);
+    let layers = all.split_off(1);
+    let splats = all.pop().expect("the splat buffer");
     stats.spp_completed = done;
     stats.invalid_samples = film.invalid_samples + splats.invalid;
     render.finish(&mut stats);
