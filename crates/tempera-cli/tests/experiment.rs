@@ -143,7 +143,7 @@ fn mistakes_in_the_experiment_file_are_clear_errors() {
         (("settings = { bootstrap", "settings = { replicas = 3, bootstrap"), "replicas is not a setting of the mmlt"),
         (("integrator = \"mmlt\"", "integrator = \"nope\""), "unknown variant `nope`"),
         (("optional = true", "optional = false"), "no/such/scene.pbrt does not exist"),
-        (("seconds = [0.4]", "seconds = []"), "at least one time"),
+        (("seconds = [0.4]", "seconds = []"), "times in `seconds` or per-pixel counts in `samples`"),
         (("spp = 16", "spp = 16\nimage = \"r.exr\""), "serves a single scene"),
         (("[budget]", "[budget]\nsnapshot = [1]"), "unknown field `snapshot`"),
     ] {

@@ -97,9 +97,9 @@ fn other_commands_refuse_to_run_across_ranks() {
 }
 
 /// An experiment across 2 ranks: the reference (a fixed budget) is rendered by both ranks and
-/// is the single process's byte for byte; every run is done once, by one rank; rank 0 writes
-/// the same rows (scenes, methods, seeds, times) as a single process, and a second invocation
-/// finds every run finished.
+/// is the single process's byte for byte; every run is done once, by one rank; with fixed
+/// budgets rank 0 writes the single process's rows (every figure but the wall time) and images,
+/// and a second invocation finds every run finished.
 #[test]
 fn an_experiment_across_ranks_renders_its_reference_together_and_deals_its_runs() {
     if !have_mpirun() {
@@ -123,7 +123,7 @@ name = "mmlt"
 integrator = "mmlt"
 settings = { bootstrap = 2000, chains = 8 }
 [budget]
-seconds = [0.3]
+samples = [2, 5]
 seeds = [1, 2, 3]
 "#;
     let (one, two) = (scratch("experiment-1"), scratch("experiment-2"));
@@ -138,13 +138,21 @@ seeds = [1, 2, 3]
     assert!(reference(&one) == reference(&two), "the reference differs from one process's");
     let rows = |d: &Path| {
         let text = std::fs::read_to_string(d.join("out/results.csv")).unwrap();
-        let mut keys: Vec<String> =
-            text.lines().skip(1).map(|l| l.split(',').take(4).collect::<Vec<_>>().join(",")).collect();
+        // Every column but `seconds` (the wall time).
+        let mut keys: Vec<String> = text
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').enumerate().filter(|(i, _)| *i != 4).map(|(_, f)| f).collect::<Vec<_>>().join(","))
+            .collect();
         keys.sort();
         keys
     };
     assert_eq!(rows(&one), rows(&two));
-    assert_eq!(rows(&two).len(), 6);
+    assert_eq!(rows(&two).len(), 12);
+    let image = |d: &Path| std::fs::read(d.join("out/images/default/mmlt/seed-2-5pp.exr")).unwrap();
+    assert!(image(&one) == image(&two), "a run's image differs from one process's");
+    let claims = std::fs::read_dir(two.join("out")).unwrap().flatten();
+    assert!(!claims.into_iter().any(|e| e.file_name().to_string_lossy().starts_with(".claims")), "claims left over");
     let again = tempera(&two, Some(2), &["experiment", "e.toml", "-q"]);
     assert!(again.status.success(), "{}", stderr(&again));
     assert_eq!(stderr(&again).matches("finished earlier").count(), 6, "{}", stderr(&again));
@@ -178,4 +186,67 @@ fn interrupting_mpirun_writes_the_image_so_far() {
     let image = tempera_image::read_image(&dir.join("so-far.exr"), tempera_image::ColorEncoding::Linear)
         .unwrap_or_else(|e| panic!("no image after the interrupt ({e}): {}", stderr(&out)));
     assert!(image.pixels.iter().any(|p| p.max_element() > 0.0), "the image so far is black");
+}
+
+/// A rank killed in the middle of an experiment ends the job (no hang) with a non-zero exit;
+/// every run finished before keeps its record, and the same command then finishes the rest,
+/// skipping them.
+#[test]
+fn a_rank_that_dies_loses_no_finished_run() {
+    if !have_mpirun() {
+        return;
+    }
+    use std::os::unix::process::CommandExt;
+    let dir = scratch("death");
+    let config = r#"
+output = "out"
+threads = 1
+[reference]
+method = "bdpt"
+spp = 4
+[[scene]]
+name = "default"
+resolution = "24x24"
+maxdepth = 4
+[[method]]
+name = "path"
+integrator = "path"
+[budget]
+seconds = [0.5]
+seeds = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]
+"#;
+    std::fs::write(dir.join("e.toml"), config).unwrap();
+    let bin = env!("CARGO_BIN_EXE_tempera");
+    let child = Command::new("mpirun")
+        .process_group(0)
+        .args(["--allow-run-as-root", "--oversubscribe", "-np", "2", bin, "experiment", "e.toml", "-q"])
+        .current_dir(&dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let runs = dir.join("out/runs/default/path");
+    let finished = || std::fs::read_dir(&runs).map_or(0, |d| d.flatten().count());
+    let start = std::time::Instant::now();
+    while finished() < 2 && start.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    // The ranks are mpirun's children; kill one outright.
+    let ranks = Command::new("pgrep").args(["-P", &child.id().to_string()]).output().unwrap();
+    let rank = String::from_utf8_lossy(&ranks.stdout).lines().last().map(str::to_owned).expect("a rank process");
+    let kept: Vec<String> =
+        std::fs::read_dir(&runs).unwrap().flatten().map(|e| e.file_name().to_string_lossy().into()).collect();
+    Command::new("kill").args(["-KILL", &rank]).status().unwrap();
+    let killed = std::time::Instant::now();
+    let out = child.wait_with_output().unwrap();
+    assert!(killed.elapsed().as_secs() < 30, "the job went on long after a rank died");
+    assert!(!out.status.success(), "a job that lost a rank reported success: {}", stderr(&out));
+    for name in &kept {
+        let text = std::fs::read_to_string(runs.join(name)).unwrap();
+        assert!(text.contains("\"relmse\""), "{name} lost or damaged: {text}");
+    }
+    let again = tempera(&dir, Some(2), &["experiment", "e.toml", "-q"]);
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert!(stderr(&again).matches("finished earlier").count() >= kept.len(), "{}", stderr(&again));
+    let csv = std::fs::read_to_string(dir.join("out/results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 11, "{csv}");
 }

@@ -82,7 +82,13 @@ impl Method {
 #[serde(deny_unknown_fields)]
 pub struct BudgetEntry {
     /// Equal-time budgets in seconds.
+    #[serde(default)]
     pub seconds: Vec<f64>,
+    /// Fixed budgets instead of times: samples (path tracing, BDPT, SPPM iterations) or
+    /// main-chain mutations (MCMC) per pixel; each is its own render, deterministic for its
+    /// seed whatever the machine, threads or ranks.
+    #[serde(default)]
+    pub samples: Vec<u32>,
     /// Extra times (seconds) at which each run records its image for convergence curves.
     #[serde(default)]
     pub snapshots: Vec<f64>,
@@ -149,8 +155,16 @@ impl Config {
             bail!("needs at least one [[scene]] and one [[method]]");
         }
         let b = &self.budget;
-        if b.seconds.is_empty() || b.seeds.is_empty() {
-            bail!("[budget] needs at least one time in `seconds` and one seed in `seeds`");
+        if b.seconds.is_empty() == b.samples.is_empty() || b.seeds.is_empty() {
+            bail!(
+                "[budget] needs times in `seconds` or per-pixel counts in `samples` (one of the two), and one seed in `seeds`"
+            );
+        }
+        if !b.samples.is_empty() && !b.snapshots.is_empty() {
+            bail!("[budget] `snapshots` are times: they go with `seconds`, not `samples`");
+        }
+        if b.samples.contains(&0) {
+            bail!("[budget] `samples` must be positive");
         }
         if b.seconds.iter().chain(&b.snapshots).any(|t| !t.is_finite() || *t <= 0.0) {
             bail!("[budget] times must be positive numbers of seconds");
@@ -188,9 +202,31 @@ impl Config {
         Ok(())
     }
 
+    /// Whether the budgets are per-pixel counts (`samples`) rather than times.
+    pub fn fixed(&self) -> bool {
+        !self.budget.samples.is_empty()
+    }
+
+    /// The unit of a budget in labels: seconds or per-pixel counts.
+    pub fn unit(&self) -> &'static str {
+        if self.fixed() { "pp" } else { "s" }
+    }
+
+    /// The budgets (times or per-pixel counts), sorted, without repeats.
+    pub fn budgets(&self) -> Vec<f64> {
+        let mut budgets: Vec<f64> = self.budget.seconds.clone();
+        budgets.extend(self.budget.samples.iter().map(|&n| f64::from(n)));
+        budgets.sort_by(f64::total_cmp);
+        budgets.dedup();
+        budgets
+    }
+
     /// Every time a run records: the snapshots and the budgets, sorted, without repeats; the
-    /// run lasts the longest.
+    /// run lasts the longest. With `samples`, the per-pixel counts (one render each).
     pub fn times(&self) -> Vec<f64> {
+        if self.fixed() {
+            return self.budgets();
+        }
         let mut times: Vec<f64> = self.budget.seconds.iter().chain(&self.budget.snapshots).copied().collect();
         times.sort_by(f64::total_cmp);
         times.dedup();
@@ -255,6 +291,15 @@ seeds = [1, 2]
         assert!(format!("{both:#}").contains("not both"), "{both:#}");
         let name = parse(&BASE.replace("name = \"mmlt\"", "name = \"a/b\"")).unwrap_err();
         assert!(format!("{name:#}").contains("method name 'a/b'"), "{name:#}");
+        let both_budgets = parse(&BASE.replace("seconds = [2, 1]", "seconds = [2, 1]\nsamples = [4]")).unwrap_err();
+        assert!(format!("{both_budgets:#}").contains("one of the two"), "{both_budgets:#}");
+        let snapshots = parse(&BASE.replace("seconds = [2, 1]", "samples = [4]")).unwrap_err();
+        assert!(format!("{snapshots:#}").contains("not `samples`"), "{snapshots:#}");
+        let fixed =
+            parse(&BASE.replace("seconds = [2, 1]", "samples = [16, 4]").replace("snapshots = [0.5, 1, 4]\n", ""));
+        let fixed = fixed.unwrap();
+        assert!(fixed.fixed() && fixed.unit() == "pp");
+        assert_eq!(fixed.times(), vec![4.0, 16.0]);
         let res = parse(&BASE.replace("32x32", "32")).unwrap_err();
         assert!(format!("{res:#}").contains("WIDTHxHEIGHT"), "{res:#}");
         let kind = parse(&BASE.replace("integrator = \"mmlt\"", "integrator = \"vcm\"")).unwrap_err();

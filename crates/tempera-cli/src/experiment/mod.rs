@@ -47,10 +47,39 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     run_on(args, &tempera::cluster::SOLO)
 }
 
+/// The prefix of the folders in which ranks claim runs.
+const CLAIMS: &str = ".claims-";
+
+/// A number that tells this invocation's claims from an earlier one's.
+fn claim_token() -> i64 {
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    (nanos as i64 ^ (i64::from(std::process::id()) << 32)) & i64::MAX
+}
+
+/// Removes the claim folders an interrupted or failed invocation left behind.
+fn remove_old_claims(output: &std::path::Path) {
+    let Ok(entries) = std::fs::read_dir(output) else { return };
+    for entry in entries.flatten() {
+        if entry.file_name().to_string_lossy().starts_with(CLAIMS) {
+            let _ = std::fs::remove_dir_all(entry.path());
+        }
+    }
+}
+
+/// Claims run `i` for this rank: true for exactly one rank (the file is created exclusively).
+fn claim(claims: &std::path::Path, i: usize) -> Result<bool> {
+    let path = claims.join(i.to_string());
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+        Ok(_) => Ok(true),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(false),
+        Err(e) => Err(anyhow::Error::new(e).context(format!("cannot claim a run in {}", claims.display()))),
+    }
+}
+
 /// Runs the experiment with the processes of `cluster` (MPI ranks sharing a file system): every
-/// reference is rendered once, by all ranks together (rank 0 writes it); the runs are dealt
-/// round-robin, each on one rank's threads (equal time stays equal resources), each rank
-/// writing the records of its runs; rank 0 then reads every record and writes the results and
+/// reference is rendered once, by all ranks together (rank 0 writes it); each rank then takes
+/// the next run no rank has claimed yet, on its own threads (equal time stays equal
+/// resources), and writes the records of its runs; rank 0 then reads every record and writes the results and
 /// the report. A rank that dies loses its unfinished run only: the next invocation skips every
 /// finished one, whichever rank wrote it.
 pub fn run_on(args: ExperimentArgs, cluster: &dyn Cluster) -> Result<()> {
@@ -66,8 +95,20 @@ pub fn run_on(args: ExperimentArgs, cluster: &dyn Cluster) -> Result<()> {
             );
         }
     }
+    // Runs are claimed through files in a folder of this invocation's own (on the shared file
+    // system), so a rank takes the next unclaimed run as soon as it is free.
+    let mut token = [0_i64];
+    if root {
+        remove_old_claims(&config.output);
+        token[0] = claim_token();
+    }
     // The other ranks write nothing before rank 0 has cleaned up.
-    cluster.broadcast(true);
+    cluster.sum(&mut token);
+    let claims = config.output.join(format!("{CLAIMS}{}", token[0]));
+    if cluster.is_distributed() && root {
+        create_folder(&claims)?;
+    }
+    cluster.barrier();
     if args.handle_interrupts {
         crate::run::install_interrupt_handler();
     }
@@ -99,12 +140,19 @@ pub fn run_on(args: ExperimentArgs, cluster: &dyn Cluster) -> Result<()> {
     for (i, job) in jobs.iter().enumerate() {
         let record = if args.report_only {
             job.existing()
-        } else if !cluster.owns(i) || crate::run::cancelled() {
+        } else if crate::run::cancelled() || (cluster.is_distributed() && !claim(&claims, i)?) {
             None
         } else {
             job.existing_or_run(i + 1, total, args.quiet)?
         };
         records.extend(record);
+    }
+    if cluster.is_distributed() && crate::run::cancelled() {
+        // Said before the barrier: when a rank died, mpirun ends the job before it is passed.
+        eprintln!(
+            "rank {}: interrupted (Ctrl-C, or mpirun ending the job because a rank stopped); finished runs are kept: run the same command again to finish the rest",
+            cluster.rank()
+        );
     }
     if cluster.is_distributed() {
         // Once every rank's records are written, rank 0 reads them all.
@@ -112,6 +160,7 @@ pub fn run_on(args: ExperimentArgs, cluster: &dyn Cluster) -> Result<()> {
         if !root {
             return Ok(());
         }
+        let _ = std::fs::remove_dir_all(&claims);
         records = jobs.iter().filter_map(runs::Job::existing).collect();
     }
     let references: Vec<_> =

@@ -28,7 +28,7 @@ pub fn colour(i: usize) -> RGBColor {
 }
 
 /// A log-log SVG plot of `series` (`metric` names the y axis); positive values only.
-pub fn error_vs_time(title: &str, metric: &str, series: &[Series]) -> Result<String, String> {
+pub fn error_vs_time(title: &str, metric: &str, x_desc: &str, series: &[Series]) -> Result<String, String> {
     let positive = |v: f64| v.is_finite() && v > 0.0;
     let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0)).filter(|&v| positive(v));
     let ys = series.iter().flat_map(|s| s.points.iter().flat_map(|p| [p.2, p.3])).filter(|&v| positive(v));
@@ -56,7 +56,7 @@ pub fn error_vs_time(title: &str, metric: &str, series: &[Series]) -> Result<Str
             .map_err(err)?;
         chart
             .configure_mesh()
-            .x_desc("time (s)")
+            .x_desc(x_desc)
             .y_desc(metric)
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .x_label_formatter(&|v| format!("{v}"))
@@ -100,10 +100,10 @@ mod tests {
             Series { name: "mmlt".into(), points: vec![(1.0, 0.1, 0.08, 0.12), (2.0, 0.05, 0.04, 0.06)] },
             Series { name: "tempered".into(), points: vec![(1.0, 0.2, 0.1, 0.3), (2.0, 0.1, 0.05, 0.2)] },
         ];
-        let svg = error_vs_time("default", "relMSE", &series).unwrap();
+        let svg = error_vs_time("default", "relMSE", "time (s)", &series).unwrap();
         assert!(svg.starts_with("<svg") && svg.contains("</svg>"));
         assert!(svg.contains("mmlt") && svg.contains("tempered") && svg.contains("relMSE"));
         assert!(svg.matches("<polyline").count() >= 2, "{svg}");
-        assert!(error_vs_time("empty", "relMSE", &[]).is_err());
+        assert!(error_vs_time("empty", "relMSE", "time (s)", &[]).is_err());
     }
 }

@@ -119,7 +119,7 @@ fn grouped<'a>(config: &Config, rows: &[&'a Row], scene: &str) -> Vec<(String, B
         .collect()
 }
 
-fn plots(scene: &str, groups: &[(String, BTreeMap<u64, Vec<&Row>>)]) -> Vec<String> {
+fn plots(config: &Config, scene: &str, groups: &[(String, BTreeMap<u64, Vec<&Row>>)]) -> Vec<String> {
     let metric = |name: &str, get: fn(&Row) -> f64| {
         let series: Vec<Series> = groups
             .iter()
@@ -135,7 +135,9 @@ fn plots(scene: &str, groups: &[(String, BTreeMap<u64, Vec<&Row>>)]) -> Vec<Stri
                     .collect(),
             })
             .collect();
-        error_vs_time(&format!("{scene}: {name} against time"), name, &series)
+        let (against, x_desc) =
+            if config.fixed() { ("samples", "samples or mutations per pixel") } else { ("time", "time (s)") };
+        error_vs_time(&format!("{scene}: {name} against {against}"), name, x_desc, &series)
             .unwrap_or_else(|e| format!("<p class=\"note\">{e}</p>"))
     };
     vec![metric("relMSE", |r| r.relmse), metric("FLIP", |r| r.flip)]
@@ -271,9 +273,7 @@ fn scene_report(
 ) -> Result<SceneReport> {
     let name = &scene.entry.name;
     let groups = grouped(config, rows, name);
-    let mut budgets = config.budget.seconds.clone();
-    budgets.sort_by(f64::total_cmp);
-    budgets.dedup();
+    let budgets = config.budgets();
     let last = *budgets.last().expect("a budget exists");
     let viewer_seed = config.budget.seeds[0];
     let reference_png = super::reference::png_name(name);
@@ -288,7 +288,7 @@ fn scene_report(
         let mut images = Vec::new();
         for t in &budgets {
             if by_time.get(&t.to_bits()).is_some_and(|rs| rs.iter().any(|r| r.seed == viewer_seed)) {
-                let stem = image_stem(name, method, viewer_seed, *t);
+                let stem = image_stem(config, name, method, viewer_seed, *t);
                 for (kind, suffix) in [("image", ".png"), ("relmse", "-relmse.png"), ("flip", "-flip.png")] {
                     images.push(ViewerImage {
                         time: super::runs::time_label(*t),
@@ -314,7 +314,7 @@ fn scene_report(
         height: scene.scene.film.height as usize,
         budgets: budgets.iter().map(|t| super::runs::time_label(*t)).collect(),
         viewer,
-        plots: plots(name, &groups),
+        plots: plots(config, name, &groups),
         table: table(&groups, &budgets),
         chains: chains(&groups, last),
         spread: spread_rows,
@@ -355,6 +355,7 @@ pub fn write(
             t.render(minijinja::context! {
                 scenes => minijinja::Value::from(minijinja::value::Serde(&reports)),
                 seeds => seeds.join(", "),
+                unit => if config.fixed() { " per pixel" } else { " s" },
                 methods => minijinja::Value::from(minijinja::value::Serde(&methods)),
             })
         })

@@ -103,6 +103,7 @@ impl Job<'_> {
             "maxdepth": self.scene.scene.defaults.max_depth,
             "times": self.config.times(),
             "budgets": self.config.budget.seconds,
+            "samples": self.config.budget.samples,
             "seed": self.seed,
             "reference": self.reference.key,
         })
@@ -141,6 +142,9 @@ impl Job<'_> {
     }
 
     fn render(&self, label: &str, quiet: bool) -> Result<Option<Record>> {
+        if self.config.fixed() {
+            return self.render_fixed(label, quiet);
+        }
         let times = self.config.times();
         let longest = *times.last().expect("a budget exists");
         let snapshot_times: Vec<Duration> =
@@ -173,11 +177,30 @@ impl Job<'_> {
         Ok(Some(Record { key: self.key(), rows }))
     }
 
+    /// One render per per-pixel budget (`[budget] samples`).
+    fn render_fixed(&self, label: &str, quiet: bool) -> Result<Option<Record>> {
+        let integrator = self.method.integrator.as_ref();
+        let mut rows = Vec::new();
+        for &n in &self.config.budget.samples {
+            let settings = RenderSettings { budget: Budget::Samples(n), seed: self.seed, threads: self.config.threads };
+            let out =
+                RenderJob { label: Some(label), ..RenderJob::new(&self.scene.scene, integrator, settings, quiet) }
+                    .run()
+                    .with_context(|| label.to_owned())?;
+            if out.stats.cancelled {
+                eprintln!("{label}: interrupted; not recorded");
+                return Ok(None);
+            }
+            rows.push(self.row(f64::from(n), &out, integrator.name())?);
+        }
+        Ok(Some(Record { key: self.key(), rows }))
+    }
+
     fn row(&self, time: f64, out: &RenderOutput, integrator: &str) -> Result<Row> {
         let c = metrics::compare(&out.image, &self.reference.image).map_err(anyhow::Error::msg)?;
         let pixels = f64::from(self.scene.scene.film.width) * f64::from(self.scene.scene.film.height);
         let all = merged(&out.chains);
-        let image = if self.config.budget.seconds.contains(&time) { Some(self.write_images(time, out)?) } else { None };
+        let image = if self.config.budgets().contains(&time) { Some(self.write_images(time, out)?) } else { None };
         Ok(Row {
             scene: self.scene.entry.name.clone(),
             method: self.method.method.name.clone(),
@@ -201,7 +224,7 @@ impl Job<'_> {
     /// Writes the image (EXR and PNG) and its relMSE and FLIP maps; returns the stem of the
     /// files, relative to the output folder.
     fn write_images(&self, time: f64, out: &RenderOutput) -> Result<String> {
-        let stem = image_stem(&self.scene.entry.name, &self.method.method.name, self.seed, time);
+        let stem = image_stem(self.config, &self.scene.entry.name, &self.method.method.name, self.seed, time);
         let base = self.config.output.join(&stem);
         super::create_folder(base.parent().expect("image paths have a folder"))?;
         let options = WriteOptions::default();
@@ -217,9 +240,9 @@ impl Job<'_> {
     }
 }
 
-/// Where the images of a run at time `time` go, relative to the output folder, without suffix.
-pub fn image_stem(scene: &str, method: &str, seed: u64, time: f64) -> String {
-    format!("images/{scene}/{method}/seed-{seed}-{}s", time_label(time))
+/// Where the images of a run at budget `time` go, relative to the output folder, without suffix.
+pub fn image_stem(config: &Config, scene: &str, method: &str, seed: u64, time: f64) -> String {
+    format!("images/{scene}/{method}/seed-{seed}-{}{}", time_label(time), config.unit())
 }
 
 fn csv_field(v: Option<f64>) -> String {
