@@ -74,6 +74,10 @@ pub struct IntegratorFlags {
     /// Tempered MMLT: sweeps (one mutation per replica) between swap steps.
     #[arg(long)]
     pub swap_every: Option<u64>,
+    /// Tempered MMLT: sweeps between mutations of the hotter replicas (replica 0 mutates every
+    /// sweep).
+    #[arg(long)]
+    pub hot_every: Option<u64>,
     /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly (five replicas at every depth, a
     /// roughness-only ladder tuned for 0.234, replica 0 alone writes the image).
     #[arg(long)]
@@ -119,6 +123,7 @@ impl IntegratorFlags {
                 _ => None,
             },
             swap_every: self.swap_every,
+            hot_every: self.hot_every,
             paper: self.paper.then_some(true),
             photons: self.photons,
             radius: self.radius,

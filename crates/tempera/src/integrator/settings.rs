@@ -175,6 +175,9 @@ pub struct IntegratorSettings {
     /// Tempered MMLT: sweeps between swap steps.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub swap_every: Option<u64>,
+    /// Tempered MMLT: sweeps between mutations of the replicas above replica 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hot_every: Option<u64>,
     /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly — five replicas at every depth,
     /// a roughness-only ladder tuned for a neighbour acceptance of 0.234, replica 0 alone
     /// writing the image (the swap strategy stays free).
@@ -235,6 +238,7 @@ impl IntegratorSettings {
             ("swap_target", self.swap_target.is_some(), tempered),
             ("reuse_replicas", self.reuse_replicas.is_some(), tempered),
             ("swap_every", self.swap_every.is_some(), tempered),
+            ("hot_every", self.hot_every.is_some(), tempered),
             ("paper", self.paper.is_some(), tempered),
             ("photons", self.photons.is_some(), kind == Sppm),
             ("radius", self.radius.is_some(), kind == Sppm),
@@ -276,6 +280,7 @@ impl IntegratorSettings {
         check_probability("collapse_above", self.collapse_above)?;
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
         check_range("swap_every", self.swap_every, 1..=1_000_000)?;
+        check_range("hot_every", self.hot_every, 1..=1_000_000)?;
         check_range("photons", self.photons, 1..=1_000_000_000)?;
         if let Some(r) = self.radius
             && !(r.is_finite() && r > 0.0)
@@ -370,6 +375,7 @@ pub fn create(
                 swap_target: s.swap_target.unwrap_or(m.swap_target),
                 reuse_replicas: s.reuse_replicas.unwrap_or(m.reuse_replicas),
                 swap_every: s.swap_every.unwrap_or(m.swap_every),
+                hot_every: s.hot_every.unwrap_or(m.hot_every),
                 ..m
             })
         }

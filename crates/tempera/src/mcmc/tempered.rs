@@ -25,6 +25,35 @@ pub struct TemperedState {
     scratch: TemperScratch,
 }
 
+impl TemperedState {
+    /// This state's value under `targets[l]` (the targets of its ensemble, by replica index),
+    /// computed once and cached in [`Self::cross`]: the swap step, the state's re-valuation
+    /// after an exchange, the reuse weights and the large-step moments all ask for the same
+    /// numbers, and a cached value is the fresh one bit for bit.
+    pub fn value_under(&mut self, l: usize, targets: &[TemperedTarget]) -> f32 {
+        if self.cross.len() != targets.len() {
+            self.cross.clear();
+            self.cross.resize(targets.len(), f32::NAN);
+        }
+        let mut v = self.cross[l];
+        if v.is_nan() {
+            v = targets[l].value_of(self);
+            self.cross[l] = v;
+        }
+        v
+    }
+
+    /// Records that this state, held by replica `j` of an ensemble of `replicas`, has its own
+    /// value there (what [`Self::value_under`] would compute for `j`).
+    pub fn note_own_value(&mut self, j: usize, replicas: usize) {
+        if self.cross.len() != replicas {
+            self.cross.clear();
+            self.cross.resize(replicas, f32::NAN);
+        }
+        self.cross[j] = self.value;
+    }
+}
+
 impl State for TemperedState {
     fn value(&self) -> f32 {
         self.value

@@ -34,6 +34,11 @@ pub struct EnsembleSettings {
     pub reuse_replicas: bool,
     /// A swap step after every `swap_every` sweeps.
     pub swap_every: u64,
+    /// Replicas `1 … K−1` mutate every `hot_every` sweeps (replica 0 every sweep). Each
+    /// mutation leaves its replica's target invariant, so any fixed schedule keeps the
+    /// ensemble's product target; fewer hot mutations make an ensemble cheaper while its
+    /// main chain keeps its pace.
+    pub hot_every: u64,
     /// The ladder's burn-in, if it is to be tuned.
     pub tuning: Option<Tuning>,
     /// Run plain MMLT chains when the tuned ladder's neighbour acceptance stays above this.
@@ -152,11 +157,14 @@ impl<'a> Ensemble<'a> {
         let Replicas { chains, targets } = &mut self.replicas;
         let large = &mut self.large;
         let valued = if reuse { targets.len() } else { 1 };
-        for (j, (chain, target)) in chains.iter_mut().zip(targets.iter()).enumerate() {
+        let hot = self.sweeps.is_multiple_of(self.settings.hot_every);
+        for (j, (chain, target)) in
+            chains.iter_mut().zip(targets.iter()).enumerate().take(if hot { usize::MAX } else { 1 })
+        {
             let splats = if j == 0 && !reuse { Some(&splats[0]) } else { None };
             chain.mutate_observed(target, splats, |proposal| {
-                for (l, (m, t)) in large.iter_mut().zip(targets.iter()).take(valued).enumerate() {
-                    let v = if l == j { proposal.value() } else { t.value_of(proposal) };
+                for (l, m) in large.iter_mut().take(valued).enumerate() {
+                    let v = if l == j { proposal.value() } else { proposal.value_under(l, targets) };
                     m.push(f64::from(target_value(v)));
                 }
             });
@@ -186,7 +194,8 @@ impl Walker for Ensemble<'_> {
                 // Every replica's current state, weighted by the balance heuristic, into the
                 // replica's own layer (normalised by its own b_l).
                 let Replicas { chains, targets } = &mut self.replicas;
-                for (chain, layer) in chains.iter_mut().zip(splats) {
+                for (j, (chain, layer)) in chains.iter_mut().zip(splats).enumerate() {
+                    chain.state_mut().note_own_value(j, targets.len());
                     let scale = reuse.scale(targets, chain.state_mut());
                     if scale > 0.0 {
                         chain.state().splat(layer, scale);

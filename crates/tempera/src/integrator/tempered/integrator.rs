@@ -51,6 +51,8 @@ pub struct TemperedIntegrator {
     pub reuse_replicas: bool,
     /// Sweeps between swap steps (1: a swap step after every sweep).
     pub swap_every: u64,
+    /// Sweeps between mutations of replicas `1 … K−1` (1: every replica mutates every sweep).
+    pub hot_every: u64,
 }
 
 impl TemperedIntegrator {
@@ -76,6 +78,7 @@ impl TemperedIntegrator {
             swap_target: 0.234,
             reuse_replicas: true,
             swap_every: 1,
+            hot_every: 1,
         }
     }
 
@@ -124,6 +127,7 @@ impl TemperedIntegrator {
             calibration_samples: self.bootstrap,
             reuse_replicas: self.reuse_replicas,
             swap_every: self.swap_every.max(1),
+            hot_every: self.hot_every.max(1),
             tuning: method.filter(|_| tune).map(|method| Tuning {
                 method,
                 target: self.swap_target,

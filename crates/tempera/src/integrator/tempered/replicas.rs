@@ -31,7 +31,7 @@ impl CrossValues for Cross<'_, '_> {
         let v = if i == j {
             f64::from(r.chains[j].state().value)
         } else {
-            f64::from(r.targets[i].value_of(r.chains[j].state_mut()))
+            f64::from(r.chains[j].state_mut().value_under(i, &r.targets))
         };
         self.cache[i * k + j] = Some(v);
         v
@@ -91,8 +91,8 @@ impl<'a> Replicas<'a> {
     /// Values replica `j`'s state afresh under its own target (after its state or its target
     /// changed).
     fn revalue(&mut self, j: usize) {
-        let value = self.targets[j].value_of(self.chains[j].state_mut());
-        self.chains[j].state_mut().value = value;
+        let state = self.chains[j].state_mut();
+        state.value = state.value_under(j, &self.targets);
     }
 
     /// One mutation per replica, splatting nothing.
@@ -104,6 +104,10 @@ impl<'a> Replicas<'a> {
 
     /// Sets the temperatures of replicas `1 …` to `ladder` and re-values their states.
     pub fn set_ladder(&mut self, ladder: &[f32]) {
+        // Values under the old temperatures are stale.
+        for chain in &mut self.chains {
+            chain.state_mut().cross.clear();
+        }
         for (j, &tau) in ladder.iter().enumerate() {
             self.targets[j + 1].set_temperature(tau);
             self.revalue(j + 1);

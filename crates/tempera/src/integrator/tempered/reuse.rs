@@ -65,18 +65,9 @@ impl Reuse {
     /// values are cached in the state (the ladder is frozen by now), so a state that stays
     /// (a rejected proposal) or moves to another replica is not evaluated again.
     pub fn scale(&self, targets: &[TemperedTarget], state: &mut TemperedState) -> f32 {
-        if state.cross.len() != targets.len() {
-            state.cross.clear();
-            state.cross.resize(targets.len(), f32::NAN);
-        }
         let mut sum = 0.0f64;
-        for (l, (target, rho)) in targets.iter().zip(&self.ratios).enumerate() {
-            let mut v = state.cross[l];
-            if v.is_nan() {
-                v = target.value_of(state);
-                state.cross[l] = v;
-            }
-            sum += f64::from(v) / rho;
+        for (l, rho) in self.ratios.iter().enumerate().take(targets.len()) {
+            sum += f64::from(state.value_under(l, targets)) / rho;
         }
         if sum > 0.0 && sum.is_finite() { (1.0 / sum) as f32 } else { 0.0 }
     }
