@@ -5,6 +5,7 @@ use crate::scene;
 use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
+use tempera::accel::AccelKind;
 
 #[derive(Args, Debug)]
 pub struct InfoArgs {
@@ -13,10 +14,13 @@ pub struct InfoArgs {
     /// Treat loader warnings as errors.
     #[arg(long)]
     pub strict: bool,
+    /// The accelerator whose build is timed (as `tempera render --accel`).
+    #[arg(long, value_enum, default_value_t = AccelKind::Bvh)]
+    pub accel: AccelKind,
 }
 
 pub fn run(args: InfoArgs) -> Result<()> {
-    let loaded = scene::load(args.scene.as_deref(), args.strict)?;
+    let loaded = scene::load(args.scene.as_deref(), args.strict, args.accel)?;
     let s = &loaded.scene;
     let name = args.scene.as_ref().map_or_else(|| "embedded default scene".to_owned(), |p| p.display().to_string());
     println!("{name}");

@@ -9,6 +9,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
+use tempera::accel::AccelKind;
 use tempera::cluster::Cluster;
 use tempera::integrator::{self, Budget, IntegratorKind, RenderSettings, RunStats};
 use tempera::scene::Scene;
@@ -61,6 +62,10 @@ pub struct RenderArgs {
     /// errors.
     #[arg(long)]
     pub strict: bool,
+    /// The ray-tracing accelerator: Tempera's BVH, or Intel Embree (builds with the `embree`
+    /// feature).
+    #[arg(long, value_enum, default_value_t = AccelKind::Bvh)]
+    pub accel: AccelKind,
     /// The most memory the render may take, in GiB (default: what the machine has available);
     /// a render whose buffers would need more refuses to start.
     #[arg(long, value_name = "GIB", value_parser = parse_gib)]
@@ -135,7 +140,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
 /// Loads the scene on every rank; every rank stops with rank 0's message when any rank could
 /// not (instead of waiting for it in the first exchange).
 fn load_everywhere(args: &RenderArgs, cluster: &dyn Cluster) -> Result<Loaded> {
-    let loaded = scene::load(args.scene.as_deref(), args.strict);
+    let loaded = scene::load(args.scene.as_deref(), args.strict, args.accel);
     if !cluster.is_distributed() {
         return loaded;
     }

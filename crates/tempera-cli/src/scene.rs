@@ -4,6 +4,7 @@
 use anyhow::{Context, Result};
 use std::path::Path;
 use std::time::Instant;
+use tempera::accel::AccelKind;
 use tempera::scene::Scene;
 use tempera_scene::{LoadInfo, LoadOptions, Warning};
 
@@ -15,9 +16,10 @@ pub struct Loaded {
     pub build_seconds: f64,
 }
 
-pub fn load(path: Option<&Path>, strict: bool) -> Result<Loaded> {
+/// Loads the scene at `path` (none: the embedded default scene) and builds it with `accel`.
+pub fn load(path: Option<&Path>, strict: bool, accel: AccelKind) -> Result<Loaded> {
     let start = Instant::now();
-    let (builder, warnings, info) = match path {
+    let (mut builder, warnings, info) = match path {
         Some(path) => {
             let loaded = tempera_scene::load(path, &LoadOptions { strict })?;
             (loaded.builder, loaded.warnings, Some(loaded.info))
@@ -26,6 +28,7 @@ pub fn load(path: Option<&Path>, strict: bool) -> Result<Loaded> {
     };
     let load_seconds = start.elapsed().as_secs_f64();
     let start = Instant::now();
+    builder.set_accel(accel);
     let scene = builder.build().context("invalid scene")?;
     Ok(Loaded { scene, warnings, info, load_seconds, build_seconds: start.elapsed().as_secs_f64() })
 }

@@ -31,8 +31,8 @@ pub fn prepare_scenes(config: &Config) -> Result<Vec<PreparedScene>> {
             }
             bail!("scene '{}': {} does not exist", entry.name, file.display());
         }
-        let loaded =
-            crate::scene::load(entry.file.as_deref(), false).with_context(|| format!("scene '{}'", entry.name))?;
+        let loaded = crate::scene::load(entry.file.as_deref(), false, tempera::accel::AccelKind::Bvh)
+            .with_context(|| format!("scene '{}'", entry.name))?;
         if !loaded.warnings.is_empty() {
             eprintln!("scene '{}': {} loader warnings (see `tempera info`)", entry.name, loaded.warnings.len());
         }

@@ -161,6 +161,16 @@ impl Geometry {
         self.alpha[shape] = Some(alpha);
     }
 
+    /// The vertices of primitive `i` when it is a triangle outside instances.
+    pub fn triangle(&self, i: u32) -> Option<[Vec3; 3]> {
+        self.triangles[i as usize]
+    }
+
+    /// Whether primitive `i` belongs to a shape with an alpha (cut-out) texture.
+    pub fn has_alpha(&self, i: u32) -> bool {
+        !self.alpha.is_empty() && self.alpha[self.prims[i as usize].shape as usize].is_some()
+    }
+
     fn alpha_keeps(&self, i: u32, ray: &Ray, t: f32, b: Vec3) -> bool {
         let r = self.prims[i as usize];
         let Some(alpha) = &self.alpha[r.shape as usize] else { return true };

@@ -2,7 +2,7 @@
 //! camera; [`SceneBuilder::build`] validates them, builds the accelerator and the light tables.
 
 use super::{NO_LIGHT, Scene};
-use crate::accel::Bvh;
+use crate::accel::{AccelKind, SceneAccel};
 use crate::camera::{Camera, CameraDesc};
 use crate::film::FilmDesc;
 use crate::geometry::{Geometry, Instance, Prototype, Shape};
@@ -67,10 +67,13 @@ pub enum SceneError {
     InvalidInstance(String),
     #[error("invalid medium: {0}")]
     InvalidMedium(String),
+    #[error("accelerator: {0}")]
+    Accel(String),
 }
 
 #[derive(Debug, Default)]
 pub struct SceneBuilder {
+    accel: AccelKind,
     shapes: Vec<Shape>,
     shape_material: Vec<u32>,
     shape_emission: Vec<Option<AreaEmission>>,
@@ -94,6 +97,11 @@ pub struct SceneBuilder {
 impl SceneBuilder {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// The accelerator [`Self::build`] makes (default: Tempera's BVH).
+    pub fn set_accel(&mut self, kind: AccelKind) {
+        self.accel = kind;
     }
 
     pub fn add_material(&mut self, material: Material) -> MaterialId {
@@ -279,7 +287,7 @@ impl SceneBuilder {
             })
             .collect::<Result<Vec<_>, _>>()?;
         geometry.add_instances(prototypes, instances);
-        let accel = Bvh::build(&mut geometry);
+        let accel = SceneAccel::build(self.accel, &mut geometry).map_err(SceneError::Accel)?;
         let bounds = geometry.world_bounds();
 
         let mut lights = self.lights;

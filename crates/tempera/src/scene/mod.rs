@@ -7,7 +7,7 @@ mod tests;
 
 pub use builder::{AreaEmission, MaterialId, PrototypeId, PrototypeShape, RenderDefaults, SceneBuilder, SceneError};
 
-use crate::accel::{Accel, Bvh};
+use crate::accel::{Accel, AccelKind, SceneAccel};
 use crate::bsdf::SurfaceBsdf;
 use crate::camera::{Camera, CameraDesc};
 use crate::film::FilmDesc;
@@ -59,7 +59,7 @@ pub struct Interaction {
 
 pub struct Scene {
     pub geometry: Geometry,
-    accel: Bvh,
+    accel: SceneAccel,
     pub materials: Vec<Material>,
     /// Bump-map displacement per material.
     displacement: Vec<Option<Texture>>,
@@ -87,6 +87,11 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The accelerator the scene was built with.
+    pub fn accel_kind(&self) -> AccelKind {
+        self.accel.kind()
+    }
+
     /// Nearest surface hit along `ray`.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
