@@ -7,9 +7,9 @@ use crate::math::Vec3;
 /// Per-ray constants of the watertight test: the axis permutation and the shear.
 #[derive(Clone, Copy, Debug)]
 pub struct RayShear {
-    kx: usize,
-    ky: usize,
     kz: usize,
+    /// The ray origin, permuted.
+    o: Vec3,
     sx: f32,
     sy: f32,
     sz: f32,
@@ -28,7 +28,19 @@ impl RayShear {
         let kx = (kz + 1) % 3;
         let ky = (kx + 1) % 3;
         let d = ray.d;
-        Self { kx, ky, kz, sx: -d[kx] / d[kz], sy: -d[ky] / d[kz], sz: 1.0 / d[kz] }
+        let o = Vec3::new(ray.o[kx], ray.o[ky], ray.o[kz]);
+        Self { kz, o, sx: -d[kx] / d[kz], sy: -d[ky] / d[kz], sz: 1.0 / d[kz] }
+    }
+
+    /// `v` with its axes in the order `(kx, ky, kz)`: the largest direction axis last. The
+    /// permutation is a rotation, picked by `kz` alone.
+    #[inline(always)]
+    fn permute(&self, v: Vec3) -> Vec3 {
+        match self.kz {
+            0 => Vec3::new(v.y, v.z, v.x),
+            1 => Vec3::new(v.z, v.x, v.y),
+            _ => v,
+        }
     }
 }
 
@@ -42,9 +54,11 @@ pub struct TriangleHit {
 /// Intersects `ray` with triangle `(p0, p1, p2)` for `0 < t < t_max`.
 #[inline]
 pub fn intersect_triangle(ray: &Ray, shear: &RayShear, p: [Vec3; 3], t_max: f32) -> Option<TriangleHit> {
-    let RayShear { kx, ky, kz, sx, sy, sz } = *shear;
-    let rel = p.map(|v| v - ray.o);
-    let mut q = rel.map(|v| Vec3::new(v[kx], v[ky], v[kz]));
+    let RayShear { sx, sy, sz, o, .. } = *shear;
+    debug_assert_eq!(o, shear.permute(ray.o));
+    // Permuting first and subtracting the permuted origin is the same arithmetic, per
+    // component, as subtracting first.
+    let mut q = p.map(|v| shear.permute(v) - o);
     for v in q.iter_mut() {
         v.x += sx * v.z;
         v.y += sy * v.z;
