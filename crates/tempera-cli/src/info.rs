@@ -46,8 +46,10 @@ pub fn run(args: InfoArgs) -> Result<()> {
     let area = s.lights.iter().filter(|l| matches!(l, tempera::light::Light::Area(_))).count();
     println!("  emitters      {} lights in total ({area} area-light primitives)", s.lights.len());
     println!(
-        "  load time     {:.3} s (parse and meshes), {:.3} s (BVH build)",
-        loaded.load_seconds, loaded.build_seconds
+        "  load time     {:.3} s (parse and meshes), {:.3} s (scene build, {} accelerator)",
+        loaded.load_seconds,
+        loaded.build_seconds,
+        s.accel_kind()
     );
     println!("  warnings      {}", loaded.warnings.len());
     for w in &loaded.warnings {
