@@ -49,6 +49,10 @@ pub struct IntegratorFlags {
     /// run plain MMLT chains.
     #[arg(long)]
     pub collapse_above: Option<f64>,
+    /// Tempered MMLT: depths whose tuned ladder swaps neighbours less often than this run
+    /// plain MMLT chains.
+    #[arg(long)]
+    pub collapse_below: Option<f64>,
     /// Tempered MMLT: how each depth's ladder is tuned (default: bootstrap, before the first
     /// mutation; ignored with --ladder).
     #[arg(long, value_enum)]
@@ -113,6 +117,7 @@ impl IntegratorFlags {
             ladder: self.ladder.clone(),
             max_temperature: self.max_temperature,
             collapse_above: self.collapse_above,
+            collapse_below: self.collapse_below,
             tempered_mis: self.tempered_mis,
             tuning: self.tuning,
             burn_in: self.burn_in,

@@ -156,6 +156,10 @@ pub struct IntegratorSettings {
     /// plain MMLT chains.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub collapse_above: Option<f64>,
+    /// Tempered MMLT: depths whose tuned ladder swaps neighbours less often than this run plain
+    /// MMLT chains.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collapse_below: Option<f64>,
     /// Tempered MMLT: which densities the tempered targets' MIS weights use.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tempered_mis: Option<TemperedMis>,
@@ -232,6 +236,7 @@ impl IntegratorSettings {
             ("ladder", self.ladder.is_some(), tempered),
             ("max_temperature", self.max_temperature.is_some(), tempered),
             ("collapse_above", self.collapse_above.is_some(), tempered),
+            ("collapse_below", self.collapse_below.is_some(), tempered),
             ("tempered_mis", self.tempered_mis.is_some(), tempered),
             ("tuning", self.tuning.is_some(), tempered),
             ("burn_in", self.burn_in.is_some(), tempered),
@@ -261,6 +266,7 @@ impl IntegratorSettings {
                 ("allocation", self.allocation.is_some()),
                 ("max_temperature", self.max_temperature.is_some()),
                 ("collapse_above", self.collapse_above.is_some()),
+                ("collapse_below", self.collapse_below.is_some()),
                 ("swap_target", self.swap_target.is_some()),
             ];
             if let Some((name, _)) = fixed.iter().find(|f| f.1) {
@@ -278,6 +284,7 @@ impl IntegratorSettings {
         }
         check_probability("swap_target", self.swap_target)?;
         check_probability("collapse_above", self.collapse_above)?;
+        check_probability("collapse_below", self.collapse_below)?;
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
         check_range("swap_every", self.swap_every, 1..=1_000_000)?;
         check_range("hot_every", self.hot_every, 1..=1_000_000)?;
@@ -369,6 +376,7 @@ pub fn create(
                 ladder: s.ladder.clone().unwrap_or_default(),
                 max_temperature: s.max_temperature.unwrap_or(m.max_temperature),
                 collapse_above: s.collapse_above.or(m.collapse_above),
+                collapse_below: s.collapse_below.or(m.collapse_below),
                 roughen_mis: s.tempered_mis.map_or(m.roughen_mis, |t| t == TemperedMis::Roughened),
                 tuning: s.tuning.or(s.burn_in.map(|_| LadderTuning::BurnIn)).unwrap_or(m.tuning),
                 burn_in: s.burn_in.unwrap_or(m.burn_in),

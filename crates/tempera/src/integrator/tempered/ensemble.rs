@@ -43,6 +43,8 @@ pub struct EnsembleSettings {
     pub tuning: Option<Tuning>,
     /// Run plain MMLT chains when the tuned ladder's neighbour acceptance stays above this.
     pub collapse_above: Option<f64>,
+    /// Run plain MMLT chains when the tuned ladder's neighbour acceptance stays below this.
+    pub collapse_below: Option<f64>,
 }
 
 pub struct Ensemble<'a> {
@@ -237,7 +239,12 @@ impl Walker for Ensemble<'_> {
             return (EnsembleGroup::default(), 0);
         }
         let (k, main) = (ensembles[0].replicas.len(), ensembles[0].replicas.targets[0]);
-        let EnsembleSettings { calibration_samples: samples, tuning, collapse_above, .. } = ensembles[0].settings;
+        let EnsembleSettings { calibration_samples: samples, tuning, collapse_above, collapse_below, .. } =
+            ensembles[0].settings;
+        let collapses = |acceptance: f64| {
+            collapse_above.is_some_and(|limit| acceptance > limit)
+                || collapse_below.is_some_and(|limit| acceptance < limit)
+        };
         let (calibration, rays) = match tuning.map(|t| (t, t.method)) {
             Some((tuning, TuningMethod::Bootstrap)) => {
                 // The bootstrap valued under every candidate temperature; the ladder chosen
@@ -255,7 +262,7 @@ impl Walker for Ensemble<'_> {
                 let columns: Vec<Vec<f32>> = (0..grid.len()).map(|g| all.of(g)).collect();
                 match ladder_from_bootstrap(&columns, &grid, k, tuning) {
                     Some((rungs, acceptance)) => {
-                        if collapse_above.is_some_and(|limit| acceptance > limit) {
+                        if collapses(acceptance) {
                             return collapse(ensembles, rays);
                         }
                         let ladder: Vec<f32> = rungs[1..].iter().map(|&g| grid[g]).collect();
@@ -275,7 +282,7 @@ impl Walker for Ensemble<'_> {
                     }
                     return (EnsembleGroup::default(), 0);
                 };
-                if collapse_above.is_some_and(|limit| acceptance > limit) {
+                if collapses(acceptance) {
                     return collapse(ensembles, 0);
                 }
                 Calibration::new(&ensembles[0].replicas.targets, group, samples)

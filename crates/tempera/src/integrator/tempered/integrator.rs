@@ -36,6 +36,10 @@ pub struct TemperedIntegrator {
     /// A depth whose tuned ladder still swaps neighbours more often than this runs plain MMLT
     /// chains instead of ensembles (its replicas barely differ); `None`: never.
     pub collapse_above: Option<f64>,
+    /// A depth whose tuned ladder swaps neighbours less often than this runs plain MMLT chains
+    /// (its hot replicas' targets are far from the main one: their reused samples and their
+    /// swaps buy less than their rays cost); `None`: never.
+    pub collapse_below: Option<f64>,
     /// Recompute MIS weights from the roughened densities (default: keep the scene's, which
     /// measured better at equal time on the default scene; see the README).
     pub roughen_mis: bool,
@@ -72,6 +76,7 @@ impl TemperedIntegrator {
             ladder: Vec::new(),
             max_temperature: 1.0,
             collapse_above: None,
+            collapse_below: None,
             roughen_mis: false,
             tuning: LadderTuning::Bootstrap,
             burn_in: 500,
@@ -93,6 +98,7 @@ impl TemperedIntegrator {
             spread_allocation: false,
             max_temperature: 1.0,
             collapse_above: None,
+            collapse_below: None,
             swap_target: 0.234,
             reuse_replicas: false,
             ..Self::new(max_depth)
@@ -134,6 +140,7 @@ impl TemperedIntegrator {
                 max_temperature: self.max_temperature,
             }),
             collapse_above: self.collapse_above,
+            collapse_below: self.collapse_below,
         }
     }
 

@@ -311,8 +311,10 @@ mod integrator {
         let hot = TemperedIntegrator { ladder: vec![0.3, 1.0, 8.0], replicas: 4, ..base.clone() };
         let collapsed = TemperedIntegrator { collapse_above: Some(0.01), max_temperature: 50.0, ..base.clone() };
         let lazy = TemperedIntegrator { hot_every: 4, ..base.clone() };
+        // Every depth's estimated acceptance lies below 0.999: all collapse.
+        let below = TemperedIntegrator { collapse_below: Some(0.999), ..base.clone() };
         let every_sweep = base.render(&scene, &settings(256, 2, 0), &control).unwrap().stats.rays;
-        for (name, t) in [("hot", hot), ("collapsed", collapsed), ("lazy", lazy)] {
+        for (name, t) in [("hot", hot), ("collapsed", collapsed), ("collapsed below", below), ("lazy", lazy)] {
             let out = t.render(&scene, &settings(256, 2, 0), &control).unwrap();
             assert_agrees(name, &out.image, &bdpt.image);
             if name == "lazy" {
