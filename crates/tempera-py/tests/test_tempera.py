@@ -191,7 +191,10 @@ def test_renders_release_the_gil():
 def test_ctrl_c_returns_the_image_so_far():
     script = textwrap.dedent(
         """
-        import sys, time, tempera
+        import signal, sys, time, tempera
+        # As in an interactive session, even when this test runs where SIGINT is ignored (a
+        # background job of a shell without job control).
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         scene = tempera.default_scene()
         print("ready", flush=True)
         start = time.time()
@@ -212,11 +215,17 @@ def test_ctrl_c_returns_the_image_so_far():
 def test_an_interrupt_from_a_timer_thread_returns_a_partial_image():
     import _thread
 
+    # interrupt_main does nothing where SIGINT is ignored (a background job of a shell without
+    # job control): handle it as an interactive session does, for this test.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(1.0, _thread.interrupt_main)
     timer.start()
     start = time.time()
-    result = tempera.render(tempera.default_scene(), "path", time=60, resolution=(48, 48), threads=1, progress=False)
-    timer.join()
+    try:
+        result = tempera.render(tempera.default_scene(), "path", time=60, resolution=(48, 48), threads=1, progress=False)
+    finally:
+        timer.join()
+        signal.signal(signal.SIGINT, previous)
     assert result.interrupted and time.time() - start < 20
     assert result.stats["cancelled"] and 0 < result.stats["samples"]
     assert np.isfinite(result.image).all() and result.image.mean() > 0
