@@ -7,18 +7,17 @@
 //! bounds and traverses and Tempera intersects: analytic spheres and disks (kept analytic, not
 //! tessellated), instances (each intersected through its prototype's own BVH), and triangles of
 //! shapes with an alpha texture (so cut-outs and stochastic alpha behave exactly as with the
-//! default BVH, with no filter function needed). A native triangle hit is re-intersected with
-//! Tempera's watertight test so that the hit distance and barycentrics are the ones the default
-//! BVH gives for the same primitive; only where that test misses at an edge Embree's own values
-//! are kept. Images therefore agree with the default BVH's up to which of two primitives hit
-//! at the same distance is reported, and rays grazing edges.
+//! default BVH, with no filter function needed). A filter function passes each native triangle
+//! hit through Tempera's watertight test: hits that test misses are rejected, and the kept one
+//! carries Tempera's distance and barycentrics, the ones the default BVH gives for the same
+//! primitive. Both accelerators then report the same nearest hit, up to which of two
+//! primitives hit at the same distance is reported.
 //!
 //! The geometry is handed to the callbacks through the intersect context (a `#[repr(C)]`
 //! extension of `RTCIntersectContext`), not stored in Embree, so the scene may move.
 
 use super::Accel;
 use crate::geometry::{Geometry, PrimHit, Ray, RayShear};
-use crate::math::Vec3;
 use embree::sys;
 use std::cell::Cell;
 use std::os::raw::{c_uint, c_void};
@@ -33,7 +32,6 @@ pub struct EmbreeAccel {
     triangles: Vec<u32>,
     /// Tempera's primitive of each user primitive.
     users: Vec<u32>,
-    triangle_geometry: c_uint,
     user_geometry: c_uint,
 }
 
@@ -52,8 +50,9 @@ struct Context<'a> {
     users: &'a [u32],
     ray: Ray,
     shear: RayShear,
-    /// The nearest user-primitive hit accepted so far (its distance is the ray's `tfar`).
-    user_hit: Cell<Option<PrimHit>>,
+    /// The nearest hit accepted so far, by the user geometry's intersection or the triangles'
+    /// filter (its primitive is the one Embree reports last, and so finally).
+    hit: Cell<Option<PrimHit>>,
 }
 
 impl<'a> Context<'a> {
@@ -67,7 +66,7 @@ impl<'a> Context<'a> {
             users: &accel.users,
             ray: *ray,
             shear: RayShear::new(ray),
-            user_hit: Cell::new(None),
+            hit: Cell::new(None),
         }
     }
 }
@@ -127,7 +126,7 @@ unsafe extern "C" fn user_intersect(args: *const sys::RTCIntersectFunctionNArgum
             rayhit.hit.u = 0.0;
             rayhit.hit.v = 0.0;
             rayhit.hit.instID = [INVALID; 1];
-            cx.user_hit.set(Some(hit));
+            cx.hit.set(Some(hit));
         }
     }
 }
@@ -160,8 +159,10 @@ unsafe extern "C" fn triangle_filter(args: *const sys::RTCFilterFunctionNArgumen
         let cx = &*(args.context as *const Context);
         let hit = &*(args.hit as *const sys::RTCHit);
         let prim = cx.triangles[hit.primID as usize];
-        if cx.geometry.intersect_prim(prim, &cx.ray, &cx.shear, f32::INFINITY).is_none() {
-            *args.valid = 0;
+        // Tempera's distance and barycentrics for the triangle, kept for `intersect`.
+        match cx.geometry.intersect_prim(prim, &cx.ray, &cx.shear, f32::INFINITY) {
+            Some(tempera_hit) => cx.hit.set(Some(tempera_hit)),
+            None => *args.valid = 0,
         }
     }
 }
@@ -189,8 +190,7 @@ impl EmbreeAccel {
             sys::rtcSetSceneBuildQuality(scene, sys::RTCBuildQuality::HIGH);
             // Watertight traversal and triangle tests (no cracks between triangles).
             sys::rtcSetSceneFlags(scene, sys::RTCSceneFlags::ROBUST);
-            let mut accel =
-                Self { device, scene, triangles, users, triangle_geometry: INVALID, user_geometry: INVALID };
+            let mut accel = Self { device, scene, triangles, users, user_geometry: INVALID };
             if !accel.triangles.is_empty() {
                 let g = sys::rtcNewGeometry(device, sys::RTCGeometryType::TRIANGLE);
                 let n = accel.triangles.len();
@@ -217,7 +217,7 @@ impl EmbreeAccel {
                 sys::rtcSetGeometryIntersectFilterFunction(g, Some(triangle_filter));
                 sys::rtcSetGeometryOccludedFilterFunction(g, Some(triangle_filter));
                 sys::rtcCommitGeometry(g);
-                accel.triangle_geometry = sys::rtcAttachGeometry(scene, g);
+                sys::rtcAttachGeometry(scene, g);
                 sys::rtcReleaseGeometry(g);
             }
             let data: (&Geometry, &[u32]) = (geometry, &accel.users);
@@ -277,22 +277,9 @@ impl Accel for EmbreeAccel {
         // SAFETY: the context starts with the `RTCIntersectContext` Embree expects and lives
         // through the query.
         unsafe { sys::rtcIntersect1(self.scene, &mut cx.base, &mut rayhit) };
-        let hit = &rayhit.hit;
-        if hit.geomID == INVALID {
-            return None;
-        }
-        if hit.geomID == self.user_geometry {
-            return cx.user_hit.get();
-        }
-        let prim = self.triangles[hit.primID as usize];
-        // Tempera's watertight test on the primitive Embree found (the filter made sure it
-        // hits): the distance and barycentrics the default BVH gives.
-        cx.geometry.intersect_prim(prim, ray, &cx.shear, f32::INFINITY).or(Some(PrimHit {
-            prim,
-            t: rayhit.ray.tfar,
-            b: Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v),
-            inner: 0,
-        }))
+        // Every hit Embree commits went through `hit` (the user geometry's intersection or the
+        // triangles' filter); the last one committed is the nearest.
+        if rayhit.hit.geomID == INVALID { None } else { cx.hit.get() }
     }
 
     fn occluded(&self, geometry: &Geometry, ray: &Ray, t_max: f32) -> bool {
@@ -309,8 +296,8 @@ mod tests {
     use super::*;
     use crate::accel::BruteForce;
     use crate::geometry::{Disk, Instance, Prototype, Shape, Sphere, TriangleMesh};
-    use crate::math::Mat4;
     use crate::math::rng::Pcg32;
+    use crate::math::{Mat4, Vec3};
 
     fn soup(rng: &mut Pcg32, count: u32, size: f32) -> TriangleMesh {
         let mut r3 = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE;
