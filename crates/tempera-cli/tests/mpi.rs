@@ -13,12 +13,17 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-fn have_mpirun() -> bool {
+/// Held by each test while it runs `mpirun`: every job oversubscribes the machine's cores, and
+/// two at once (the test harness runs tests in parallel) can delay a job's start past what a
+/// test waits for. `None` (the test skips) when `mpirun` is missing.
+fn mpirun_alone() -> Option<std::sync::MutexGuard<'static, ()>> {
+    static MPIRUN: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let found = Command::new("mpirun").arg("--version").output().is_ok_and(|o| o.status.success());
     if !found {
         eprintln!("skipped: mpirun not found (install openmpi-bin)");
+        return None;
     }
-    found
+    Some(MPIRUN.lock().unwrap_or_else(std::sync::PoisonError::into_inner))
 }
 
 /// `tempera ARGS` in one process, or under `mpirun -np ranks`.
@@ -41,9 +46,7 @@ fn stderr(out: &Output) -> String {
 
 #[test]
 fn ranks_render_the_single_process_image_byte_for_byte() {
-    if !have_mpirun() {
-        return;
-    }
+    let Some(_alone) = mpirun_alone() else { return };
     let dir = scratch("identical");
     let common = ["--resolution", "40x30", "--seed", "5", "--threads", "1", "--quiet"];
     let runs: [(&str, &[&str]); 6] = [
@@ -75,9 +78,7 @@ fn ranks_render_the_single_process_image_byte_for_byte() {
 
 #[test]
 fn a_scene_no_rank_can_load_stops_every_rank_with_one_error() {
-    if !have_mpirun() {
-        return;
-    }
+    let Some(_alone) = mpirun_alone() else { return };
     let dir = scratch("missing");
     let out = tempera(&dir, Some(2), &["render", "no-such-scene.pbrt", "--quiet"]);
     assert!(!out.status.success());
@@ -87,9 +88,7 @@ fn a_scene_no_rank_can_load_stops_every_rank_with_one_error() {
 
 #[test]
 fn other_commands_refuse_to_run_across_ranks() {
-    if !have_mpirun() {
-        return;
-    }
+    let Some(_alone) = mpirun_alone() else { return };
     let dir = scratch("info");
     let out = tempera(&dir, Some(2), &["info"]);
     assert!(!out.status.success());
@@ -102,9 +101,7 @@ fn other_commands_refuse_to_run_across_ranks() {
 /// and a second invocation finds every run finished.
 #[test]
 fn an_experiment_across_ranks_renders_its_reference_together_and_deals_its_runs() {
-    if !have_mpirun() {
-        return;
-    }
+    let Some(_alone) = mpirun_alone() else { return };
     let config = r#"
 output = "out"
 threads = 1
@@ -162,9 +159,7 @@ seeds = [1, 2, 3]
 /// image rendered so far, as a single process does.
 #[test]
 fn interrupting_mpirun_writes_the_image_so_far() {
-    if !have_mpirun() {
-        return;
-    }
+    let Some(_alone) = mpirun_alone() else { return };
     use std::os::unix::process::CommandExt;
     let dir = scratch("interrupt");
     let bin = env!("CARGO_BIN_EXE_tempera");
@@ -193,9 +188,7 @@ fn interrupting_mpirun_writes_the_image_so_far() {
 /// skipping them.
 #[test]
 fn a_rank_that_dies_loses_no_finished_run() {
-    if !have_mpirun() {
-        return;
-    }
+    let Some(_alone) = mpirun_alone() else { return };
     use std::os::unix::process::CommandExt;
     let dir = scratch("death");
     let config = r#"
