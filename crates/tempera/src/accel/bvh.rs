@@ -9,6 +9,7 @@ use crate::math::Vec3;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray as BvhRay;
+use rayon::prelude::*;
 use std::time::Duration;
 
 struct Bounds(Aabb);
@@ -54,6 +55,7 @@ impl Bvh {
             return Self { tree: None };
         }
         let bounds: Vec<Bounds> = (0..geometry.prims.len())
+            .into_par_iter()
             .map(|i| {
                 let (lo, hi) = geometry.bounds(i);
                 // Pad flat boxes (axis-aligned quads) so that slab tests stay robust.

@@ -98,9 +98,10 @@ impl Geometry {
     }
 
     fn cache_triangles(&mut self) {
+        use rayon::prelude::*;
         self.triangles = self
             .prims
-            .iter()
+            .par_iter()
             .map(|r| match self.shapes.get(r.shape as usize) {
                 Some(Shape::Mesh(m)) => Some(m.vertices(r.index)),
                 Some(Shape::Sphere(_) | Shape::Disk(_)) | None => None,
