@@ -4,7 +4,9 @@
 
 use clap::Args;
 use tempera::bidir::Heuristic;
-use tempera::integrator::{Allocation, IntegratorSettings, LadderTuning, PhotonSampler, Swap, TemperedMis};
+use tempera::integrator::{
+    Allocation, IntegratorSettings, LadderTuning, PhotonSampler, ReplicaSplats, Swap, TemperedMis,
+};
 
 /// The flags of `tempera render` that set up the integrator. They are parsed as plain values;
 /// their ranges and their agreement with each other and with the integrator are checked where
@@ -75,6 +77,11 @@ pub struct IntegratorFlags {
     /// Tempered MMLT: replica 0 alone writes the image (as in Šik & Křivánek 2016).
     #[arg(long, overrides_with = "reuse_replicas")]
     pub no_reuse_replicas: bool,
+    /// Tempered MMLT: with reuse, which states of each replica splat: every mutation's proposal
+    /// and current state with their acceptance probabilities as weights (default: expected), or
+    /// the current state after each swap step (states).
+    #[arg(long, value_enum)]
+    pub replica_splats: Option<ReplicaSplats>,
     /// Tempered MMLT: sweeps (one mutation per replica) between swap steps.
     #[arg(long)]
     pub swap_every: Option<u64>,
@@ -127,6 +134,7 @@ impl IntegratorFlags {
                 (_, true) => Some(false),
                 _ => None,
             },
+            replica_splats: self.replica_splats,
             swap_every: self.swap_every,
             hot_every: self.hot_every,
             paper: self.paper.then_some(true),

@@ -24,7 +24,9 @@ pub use mmlt::MmltIntegrator;
 pub use path::PathIntegrator;
 pub use pssmlt::PssmltIntegrator;
 pub use run_stats::RunStats;
-pub use settings::{Allocation, IntegratorKind, IntegratorSettings, LadderTuning, Swap, TemperedMis, create};
+pub use settings::{
+    Allocation, IntegratorKind, IntegratorSettings, LadderTuning, ReplicaSplats, Swap, TemperedMis, create,
+};
 pub use sppm::{PhotonSampler, SppmIntegrator};
 pub use tempered::TemperedIntegrator;
 

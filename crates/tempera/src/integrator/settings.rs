@@ -98,6 +98,19 @@ pub enum Allocation {
     Spread,
 }
 
+/// Which states of each replica splat when every replica contributes to the image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum ReplicaSplats {
+    /// Every mutation's proposal and current state, with their acceptance probabilities as
+    /// weights (expected-value splatting, as an MMLT chain splats).
+    #[default]
+    Expected,
+    /// The current state after each swap step.
+    States,
+}
+
 /// How tempered MMLT tunes each depth's ladder (without a fixed ladder).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
@@ -176,6 +189,9 @@ pub struct IntegratorSettings {
     /// Tempered MMLT: every replica contributes to the image.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reuse_replicas: Option<bool>,
+    /// Tempered MMLT: with reuse, which of each replica's states splat.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replica_splats: Option<ReplicaSplats>,
     /// Tempered MMLT: sweeps between swap steps.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub swap_every: Option<u64>,
@@ -242,6 +258,7 @@ impl IntegratorSettings {
             ("burn_in", self.burn_in.is_some(), tempered),
             ("swap_target", self.swap_target.is_some(), tempered),
             ("reuse_replicas", self.reuse_replicas.is_some(), tempered),
+            ("replica_splats", self.replica_splats.is_some(), tempered),
             ("swap_every", self.swap_every.is_some(), tempered),
             ("hot_every", self.hot_every.is_some(), tempered),
             ("paper", self.paper.is_some(), tempered),
@@ -382,6 +399,7 @@ pub fn create(
                 burn_in: s.burn_in.unwrap_or(m.burn_in),
                 swap_target: s.swap_target.unwrap_or(m.swap_target),
                 reuse_replicas: s.reuse_replicas.unwrap_or(m.reuse_replicas),
+                replica_splats: s.replica_splats.unwrap_or(m.replica_splats),
                 swap_every: s.swap_every.unwrap_or(m.swap_every),
                 hot_every: s.hot_every.unwrap_or(m.hot_every),
                 ..m

@@ -146,7 +146,27 @@ impl<S: State> Chain<S> {
         &mut self,
         target: &impl Target<State = S>,
         splats: Option<&SharedSplats>,
+        observe: impl FnMut(&mut S),
+    ) {
+        self.mutate_splatting(target, observe, |c, weight| {
+            if let Some(splats) = splats
+                && weight > 0.0
+                && c.value() > 0.0
+            {
+                c.splat(splats, weight / c.value());
+            }
+        });
+    }
+
+    /// [`Self::mutate_observed`] with the splatting left to `splat`, which is shown the
+    /// proposal with its acceptance probability `a`, then the current state with `1 − a`
+    /// (expected-value splatting with weights of the caller's choosing: replica ensembles
+    /// that reuse every replica weight each state by the balance heuristic over their targets).
+    pub fn mutate_splatting(
+        &mut self,
+        target: &impl Target<State = S>,
         mut observe: impl FnMut(&mut S),
+        mut splat: impl FnMut(&mut S, f32),
     ) {
         self.cx.sampler.start_iteration();
         let large = self.cx.sampler.is_large_step();
@@ -154,23 +174,20 @@ impl<S: State> Chain<S> {
         if large {
             observe(&mut self.proposal);
         }
-        let (proposal, current) = (&self.proposal, &self.current);
         let s = &mut self.stats;
-        s.invalid += u64::from(proposal.invalid());
+        s.invalid += u64::from(self.proposal.invalid());
         if large {
-            self.large.push(f64::from(proposal.value()));
+            self.large.push(f64::from(self.proposal.value()));
             s.large_steps_proposed += 1;
         } else {
             s.small_steps_proposed += 1;
         }
-        let a = if current.value() > 0.0 { (proposal.value() / current.value()).min(1.0) } else { 1.0 };
-        if let Some(splats) = splats {
-            for (c, weight) in [(proposal, a), (current, 1.0 - a)] {
-                if weight > 0.0 && c.value() > 0.0 {
-                    c.splat(splats, weight / c.value());
-                }
-            }
-        }
+        let (pv, cv) = (self.proposal.value(), self.current.value());
+        let a = if cv > 0.0 { (pv / cv).min(1.0) } else { 1.0 };
+        splat(&mut self.proposal, a);
+        splat(&mut self.current, 1.0 - a);
+        let (proposal, current) = (&self.proposal, &self.current);
+        let s = &mut self.stats;
         s.mutations += 1;
         if self.rng.next_f32() < a {
             if proposal.technique() != current.technique() {

@@ -2,8 +2,9 @@
 //! (every `swap_every` sweeps) by a swap step of its kernel. Replica 0 holds the scene's BSDFs;
 //! its mutations are the ensemble's mutations in budgets and statistics. Either replica 0 alone
 //! splats (its proposals and current states with their expected weights, as an MMLT chain),
-//! or, with all-replica reuse ([`super::reuse`]), every replica's current state splats after
-//! each sweep with its balance-heuristic weight.
+//! or, with all-replica reuse ([`super::reuse`]), every replica splats with its
+//! balance-heuristic weight: its proposals and current states with their expected weights
+//! (the default), or its current state after each swap step.
 //!
 //! The depth's ensembles are prepared together: the shared ladder is tuned ([`super::ladder`])
 //! unless it is given; then the depth's bootstrap samples are valued under every replica's
@@ -19,8 +20,10 @@ use super::{SwapKernel, swap_acceptance};
 use crate::film::SharedSplats;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
+use crate::integrator::ReplicaSplats;
 use crate::mcmc::{
-    Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, TemperedTarget, Walker, target_value,
+    Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, TemperedState, TemperedTarget, Walker,
+    target_value,
 };
 use rayon::prelude::*;
 
@@ -32,6 +35,8 @@ pub struct EnsembleSettings {
     pub calibration_samples: usize,
     /// Whether every replica is to contribute to the image.
     pub reuse_replicas: bool,
+    /// With reuse: which of each replica's states splat.
+    pub replica_splats: ReplicaSplats,
     /// A swap step after every `swap_every` sweeps.
     pub swap_every: u64,
     /// Replicas `1 … K−1` mutate every `hot_every` sweeps (replica 0 every sweep). Each
@@ -153,24 +158,61 @@ impl<'a> Ensemble<'a> {
         self.large = vec![Moments::default(); self.replicas.len()];
     }
 
-    /// One sweep: a mutation per replica (replica 0 splatting unless `reuse`), each large-step
-    /// proposal valued under the first `valued` targets for their normalisations.
-    fn sweep(&mut self, splats: &[SharedSplats], reuse: bool) {
+    /// One sweep: a mutation per replica, each large-step proposal valued under the first
+    /// `valued` targets for their normalisations. Without reuse replica 0 splats as an MMLT
+    /// chain does. With reuse and [`ReplicaSplats::Expected`] every replica splats its proposal
+    /// and its current state with their expected weights (`a` and `1 − a`), each times its
+    /// balance-heuristic scale, into the replica's own layer; with [`ReplicaSplats::States`]
+    /// the current states splat after the swap step instead ([`Walker::run`]).
+    fn sweep(&mut self, splats: &[SharedSplats], reuse: Option<&Reuse>) {
+        let expected = reuse.filter(|_| self.settings.replica_splats == ReplicaSplats::Expected);
         let Replicas { chains, targets } = &mut self.replicas;
+        let targets: &[TemperedTarget] = targets;
         let large = &mut self.large;
-        let valued = if reuse { targets.len() } else { 1 };
+        let valued = if reuse.is_some() { targets.len() } else { 1 };
         let hot = self.sweeps.is_multiple_of(self.settings.hot_every);
-        for (j, (chain, target)) in
-            chains.iter_mut().zip(targets.iter()).enumerate().take(if hot { usize::MAX } else { 1 })
-        {
-            let splats = if j == 0 && !reuse { Some(&splats[0]) } else { None };
-            chain.mutate_observed(target, splats, |proposal| {
+        for (j, (chain, target)) in chains.iter_mut().zip(targets).enumerate() {
+            if j > 0 && !hot {
+                // A replica that sits this sweep out keeps its state, which counts as this
+                // sweep's sample of its target.
+                if let Some(reuse) = expected {
+                    splat_reused(reuse, targets, chain.state_mut(), j, 1.0, &splats[j]);
+                }
+                continue;
+            }
+            let observe = |proposal: &mut TemperedState| {
                 for (l, m) in large.iter_mut().take(valued).enumerate() {
                     let v = if l == j { proposal.value() } else { proposal.value_under(l, targets) };
                     m.push(f64::from(target_value(v)));
                 }
-            });
+            };
+            match expected {
+                Some(reuse) => chain.mutate_splatting(target, observe, |state, weight| {
+                    splat_reused(reuse, targets, state, j, weight, &splats[j]);
+                }),
+                None => chain.mutate_observed(target, (j == 0 && reuse.is_none()).then(|| &splats[0]), observe),
+            }
         }
+    }
+}
+
+/// Splats `state`, a state of replica `j` (its proposal or its current state), with `weight`
+/// times its balance-heuristic scale into `layer`.
+fn splat_reused(
+    reuse: &Reuse,
+    targets: &[TemperedTarget],
+    state: &mut TemperedState,
+    j: usize,
+    weight: f32,
+    layer: &SharedSplats,
+) {
+    if weight <= 0.0 {
+        return;
+    }
+    state.note_own_value(j, targets.len());
+    let scale = reuse.scale(targets, state);
+    if scale > 0.0 {
+        state.splat(layer, weight * scale);
     }
 }
 
@@ -187,12 +229,14 @@ impl Walker for Ensemble<'_> {
             if done % 256 == 0 && stop() {
                 break;
             }
-            self.sweep(splats, group.reuse.is_some());
+            self.sweep(splats, group.reuse.as_ref());
             self.sweeps += 1;
             if self.sweeps.is_multiple_of(self.settings.swap_every) {
                 self.swap();
             }
-            if let Some(reuse) = &group.reuse {
+            if let Some(reuse) = &group.reuse
+                && self.settings.replica_splats == ReplicaSplats::States
+            {
                 // Every replica's current state, weighted by the balance heuristic, into the
                 // replica's own layer (normalised by its own b_l).
                 let Replicas { chains, targets } = &mut self.replicas;

@@ -6,7 +6,9 @@ use super::{
     Ensemble, EnsembleSettings, EquiEnergy, Neighbor, Permutation, Replicas, SwapKernel, Tuning, TuningMethod,
 };
 use crate::bidir::{Heuristic, Tempering};
-use crate::integrator::{Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, Swap};
+use crate::integrator::{
+    Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap,
+};
 use crate::math::rng::{Pcg32, hash};
 use crate::mcmc::{ChainSettings, StartContext, TemperedTarget};
 use crate::scene::Scene;
@@ -53,6 +55,9 @@ pub struct TemperedIntegrator {
     /// instead of replica 0 alone (default: on, which measured better on every scene tried;
     /// see the README).
     pub reuse_replicas: bool,
+    /// With reuse, which of each replica's states splat (default: proposals and current
+    /// states with their expected weights; see the README).
+    pub replica_splats: ReplicaSplats,
     /// Sweeps between swap steps (1: a swap step after every sweep).
     pub swap_every: u64,
     /// Sweeps between mutations of replicas `1 … K−1` (1: every replica mutates every sweep).
@@ -82,6 +87,7 @@ impl TemperedIntegrator {
             burn_in: 500,
             swap_target: 0.234,
             reuse_replicas: true,
+            replica_splats: ReplicaSplats::Expected,
             swap_every: 1,
             hot_every: 1,
         }
@@ -132,6 +138,7 @@ impl TemperedIntegrator {
         EnsembleSettings {
             calibration_samples: self.bootstrap,
             reuse_replicas: self.reuse_replicas,
+            replica_splats: self.replica_splats,
             swap_every: self.swap_every.max(1),
             hot_every: self.hot_every.max(1),
             tuning: method.filter(|_| tune).map(|method| Tuning {
