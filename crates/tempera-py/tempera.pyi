@@ -59,9 +59,9 @@ def render(
     """Renders `scene` under one budget (spp, mpp or time seconds; default the scene's spp).
     Further keyword arguments are the integrator's settings as in experiment files
     (bootstrap, chains, large_step, allocation, replicas, swap, ladder, max_temperature,
-    collapse_above, collapse_below, tuning, burn_in, swap_target, tempered_mis, reuse_replicas,
-    replica_splats, swap_every, hot_every, paper, mis, photons, radius, photon_sampler). Bad
-    settings raise ValueError. Ctrl-C returns the image so far."""
+    collapse_above, collapse_below, pilot, tuning, burn_in, swap_target, tempered_mis,
+    reuse_replicas, replica_splats, swap_every, hot_every, paper, mis, photons, radius,
+    photon_sampler). Bad settings raise ValueError. Ctrl-C returns the image so far."""
 
 def compare(
     image: ImageLike, reference: ImageLike, metrics: Sequence[str] | None = None

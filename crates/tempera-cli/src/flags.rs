@@ -55,6 +55,12 @@ pub struct IntegratorFlags {
     /// plain MMLT chains.
     #[arg(long)]
     pub collapse_below: Option<f64>,
+    /// Tempered MMLT: sweeps of the pilot that decides, per depth, whether ensembles pay for
+    /// their replicas: half the depth's walkers run as ensembles, as many as plain MMLT
+    /// chains, and the depth keeps the kind with the lower error per ray (0: ensembles at
+    /// every depth).
+    #[arg(long)]
+    pub pilot: Option<u64>,
     /// Tempered MMLT: how each depth's ladder is tuned (default: bootstrap, before the first
     /// mutation; ignored with --ladder).
     #[arg(long, value_enum)]
@@ -125,6 +131,7 @@ impl IntegratorFlags {
             max_temperature: self.max_temperature,
             collapse_above: self.collapse_above,
             collapse_below: self.collapse_below,
+            pilot: self.pilot,
             tempered_mis: self.tempered_mis,
             tuning: self.tuning,
             burn_in: self.burn_in,

@@ -109,16 +109,29 @@ const SHARED_MAX: f32 = 1.0e9;
 /// A splat buffer that threads add to concurrently (see the module documentation).
 #[derive(Debug)]
 pub struct SharedSplats {
+    /// The film's size in pixels.
     pub width: u32,
     pub height: u32,
+    /// Each sum covers a square of `2^shift` pixels on a side (0: one pixel).
+    shift: u32,
+    /// Sums per row.
+    row: usize,
     sums: Vec<[AtomicI64; 3]>,
     invalid: AtomicU64,
 }
 
 impl SharedSplats {
     pub fn new(width: u32, height: u32) -> Self {
-        let sums = (0..width as usize * height as usize).map(|_| Default::default()).collect();
-        Self { width, height, sums, invalid: AtomicU64::new(0) }
+        Self::coarse(width, height, 0)
+    }
+
+    /// A buffer for a film of `width × height` pixels whose sums each cover a square of
+    /// `2^shift` pixels on a side: a coarse image of where a chain's splats went.
+    pub fn coarse(width: u32, height: u32, shift: u32) -> Self {
+        let cells = |n: u32| (n as usize).div_ceil(1 << shift);
+        let (row, rows) = (cells(width), cells(height));
+        let sums = (0..row * rows).map(|_| Default::default()).collect();
+        Self { width, height, shift, row, sums, invalid: AtomicU64::new(0) }
     }
 
     /// Adds `l` to the pixel containing raster position `p` (box reconstruction).
@@ -132,7 +145,7 @@ impl SharedSplats {
         if x < 0.0 || y < 0.0 || x >= self.width as f32 || y >= self.height as f32 {
             return;
         }
-        let s = &self.sums[y as usize * self.width as usize + x as usize];
+        let s = &self.sums[(y as usize >> self.shift) * self.row + (x as usize >> self.shift)];
         for (sum, v) in s.iter().zip([l.x, l.y, l.z]) {
             let v = (f64::from(v) * SHARED_SCALE).round() as i64;
             if v != 0 {
@@ -166,7 +179,7 @@ impl SharedSplats {
     }
 
     /// The accumulated image multiplied by `scale` (consistent once the adding threads have
-    /// finished, as between the chain driver's rounds).
+    /// finished, as between the chain driver's rounds), one pixel per sum.
     pub fn image(&self, scale: f64) -> Image {
         let pixels = self
             .sums
@@ -176,7 +189,7 @@ impl SharedSplats {
                 Rgb::new(c(0), c(1), c(2))
             })
             .collect();
-        Image::new(self.width as usize, self.height as usize, pixels)
+        Image::new(self.row, self.sums.len() / self.row.max(1), pixels)
     }
 }
 

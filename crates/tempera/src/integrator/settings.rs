@@ -189,6 +189,10 @@ pub struct IntegratorSettings {
     /// Tempered MMLT: every replica contributes to the image.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reuse_replicas: Option<bool>,
+    /// Tempered MMLT: sweeps of the pilot that decides per depth whether ensembles pay for
+    /// their replicas (0: ensembles at every depth).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pilot: Option<u64>,
     /// Tempered MMLT: with reuse, which of each replica's states splat.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replica_splats: Option<ReplicaSplats>,
@@ -258,6 +262,7 @@ impl IntegratorSettings {
             ("burn_in", self.burn_in.is_some(), tempered),
             ("swap_target", self.swap_target.is_some(), tempered),
             ("reuse_replicas", self.reuse_replicas.is_some(), tempered),
+            ("pilot", self.pilot.is_some(), tempered),
             ("replica_splats", self.replica_splats.is_some(), tempered),
             ("swap_every", self.swap_every.is_some(), tempered),
             ("hot_every", self.hot_every.is_some(), tempered),
@@ -284,6 +289,7 @@ impl IntegratorSettings {
                 ("max_temperature", self.max_temperature.is_some()),
                 ("collapse_above", self.collapse_above.is_some()),
                 ("collapse_below", self.collapse_below.is_some()),
+                ("pilot", self.pilot.is_some()),
                 ("swap_target", self.swap_target.is_some()),
             ];
             if let Some((name, _)) = fixed.iter().find(|f| f.1) {
@@ -305,6 +311,7 @@ impl IntegratorSettings {
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
         check_range("swap_every", self.swap_every, 1..=1_000_000)?;
         check_range("hot_every", self.hot_every, 1..=1_000_000)?;
+        check_range("pilot", self.pilot, 0..=10_000_000)?;
         check_range("photons", self.photons, 1..=1_000_000_000)?;
         if let Some(r) = self.radius
             && !(r.is_finite() && r > 0.0)
@@ -394,6 +401,7 @@ pub fn create(
                 max_temperature: s.max_temperature.unwrap_or(m.max_temperature),
                 collapse_above: s.collapse_above.or(m.collapse_above),
                 collapse_below: s.collapse_below.or(m.collapse_below),
+                pilot: s.pilot.unwrap_or(m.pilot),
                 roughen_mis: s.tempered_mis.map_or(m.roughen_mis, |t| t == TemperedMis::Roughened),
                 tuning: s.tuning.or(s.burn_in.map(|_| LadderTuning::BurnIn)).unwrap_or(m.tuning),
                 burn_in: s.burn_in.unwrap_or(m.burn_in),

@@ -87,6 +87,11 @@ impl<S: State> Chain<S> {
         self.cx.rays
     }
 
+    /// Counts `rays` more as traced by this chain (those of chains it replaces).
+    pub fn count_rays(&mut self, rays: u64) {
+        self.cx.rays += rays;
+    }
+
     /// Replaces this chain by `fresh`, keeping the count of rays traced by both.
     pub fn restart(&mut self, fresh: Chain<S>) {
         let rays = self.cx.rays;

@@ -90,12 +90,14 @@ pub trait Walker: Send {
         Self: Sized;
 }
 
-/// A group of walkers: its index, the render's seed and the driver's settings.
+/// A group of walkers: its index, the render's seed, the driver's settings and, under a fixed
+/// budget, the group's share of the mutations.
 #[derive(Clone, Copy)]
 pub struct GroupContext<'a> {
     pub k: usize,
     pub seed: u64,
     pub settings: &'a ChainSettings,
+    pub budget: Option<u64>,
 }
 
 impl GroupContext<'_> {
@@ -311,7 +313,7 @@ impl ChainSettings {
                 let (k, c) = (slot.group, slot.index);
                 let rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, c as u64]), 7);
                 let bootstrap = &boots[k].values;
-                let group = GroupContext { k, seed, settings: self };
+                let group = GroupContext { k, seed, settings: self, budget: slot.budget };
                 start_walker(StartContext { group, c, rng, starts: &starts[k], bootstrap })
             })
             .collect();
@@ -378,20 +380,21 @@ impl ChainSettings {
         h: u32,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> (Vec<Option<Group<W::Group>>>, u64) {
-        let mut slices: Vec<(usize, &mut [W])> = Vec::new();
+        let mut slices: Vec<(usize, Option<u64>, &mut [W])> = Vec::new();
         let (mut rest, mut first) = (walkers, 0);
         while !rest.is_empty() {
             let k = plan[first].group;
             let n = plan[first..].iter().take_while(|p| p.group == k).count();
             let (group, tail) = rest.split_at_mut(n);
-            slices.push((k, group));
+            slices.push((k, plan[first].budget, group));
             (rest, first) = (tail, first + n);
         }
         let results: Vec<(usize, W::Group, u64, f64)> = slices
             .into_par_iter()
-            .map(|(k, group)| {
+            .map(|(k, budget, group)| {
                 let start = std::time::Instant::now();
-                let (shared, rays) = W::prepare_group(group, &GroupContext { k, seed, settings: self }, stop);
+                let cx = GroupContext { k, seed, settings: self, budget };
+                let (shared, rays) = W::prepare_group(group, &cx, stop);
                 (k, shared, rays, start.elapsed().as_secs_f64())
             })
             .collect();

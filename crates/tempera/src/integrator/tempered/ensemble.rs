@@ -18,9 +18,9 @@ use super::replicas::Replicas;
 use super::reuse::Reuse;
 use super::{SwapKernel, swap_acceptance};
 use crate::film::SharedSplats;
+use crate::integrator::ReplicaSplats;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
-use crate::integrator::ReplicaSplats;
 use crate::mcmc::{
     Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, TemperedState, TemperedTarget, Walker,
     target_value,
@@ -50,6 +50,9 @@ pub struct EnsembleSettings {
     pub collapse_above: Option<f64>,
     /// Run plain MMLT chains when the tuned ladder's neighbour acceptance stays below this.
     pub collapse_below: Option<f64>,
+    /// Sweeps of the pilot that decides whether the depth's ensembles pay for their replicas
+    /// ([`ensembles_pay`]; 0: no pilot, ensembles everywhere).
+    pub pilot: u64,
 }
 
 pub struct Ensemble<'a> {
@@ -344,8 +347,107 @@ impl Walker for Ensemble<'_> {
             e.restart(&starts, group);
             e.discard_statistics();
         });
-        (EnsembleGroup { reuse }, rays)
+        let shared = EnsembleGroup { reuse };
+        let values = calibration.of(0);
+        let b0 = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len().max(1) as f64;
+        if ensembles_pay(ensembles, &shared, b0, group, stop) == Some(false) {
+            return collapse(ensembles, rays);
+        }
+        // The pilot's statistics are not the render's.
+        ensembles.par_iter_mut().for_each(|e| e.discard_statistics());
+        (shared, rays)
     }
+}
+
+/// Pilot walkers per kind, at most.
+const PILOT_WALKERS: usize = 32;
+/// The shortest pilot that decides anything, in sweeps.
+const MIN_PILOT: u64 = 64;
+
+/// Whether a depth's ensembles pay for their replicas, measured by a pilot (`None`: not
+/// measured — no pilot asked for, fewer than eight walkers, too small a budget, or stopped).
+/// The first half of the depth's walkers (at most [`PILOT_WALKERS`]) make
+/// [`EnsembleSettings::pilot`] sweeps as ensembles, just as in the render; as many others make
+/// as many mutations of replica 0 alone, a plain MMLT chain. Each splats into a coarse image
+/// of its own (blocks of about an eighth of the film's longer side), scaled as the render
+/// scales it (normalisation `b0`). The walkers started independently in their stationary
+/// distributions, so the spread of their images over walkers is the error of a render of that
+/// many mutations, slow mixing included. The ensembles pay when that spread (per block,
+/// relative to the block's squared mean plus relMSE's `ε = 0.01`, summed over the blocks)
+/// times their rays per main-chain mutation is below the plain chains'. Rays, not seconds,
+/// measure the cost, so the decision is the same on every machine, thread count and rank.
+/// Under a fixed budget the pilot takes at most a quarter of the depth's mutations.
+fn ensembles_pay(
+    ensembles: &mut [Ensemble],
+    shared: &EnsembleGroup,
+    b0: f64,
+    group: &GroupContext,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<bool> {
+    let n = (ensembles.len() / 2).min(PILOT_WALKERS);
+    let sweeps = ensembles.first()?.settings.pilot;
+    let sweeps = group.budget.map_or(sweeps, |b| sweeps.min(b / (8 * n as u64).max(1)));
+    if n < 4 || sweeps < MIN_PILOT || b0 <= 0.0 {
+        return None;
+    }
+    let film = &ensembles[0].replicas.targets[0].scene.film;
+    let (w, h) = (film.width, film.height);
+    let shift = w.max(h).div_ceil(8).max(1).next_power_of_two().trailing_zeros();
+    let scale = b0 * f64::from(w) * f64::from(h) / f64::from(1u32 << (2 * shift));
+    let (head, tail) = ensembles.split_at_mut(n);
+    let layers = shared.count();
+    let tempered: Vec<(Vec<f64>, f64)> = head
+        .par_iter_mut()
+        .map(|e| {
+            let buffers: Vec<SharedSplats> = (0..layers).map(|_| SharedSplats::coarse(w, h, shift)).collect();
+            let rays = e.rays();
+            let done = e.run(shared, sweeps, &buffers, stop);
+            (blocks(&buffers, scale, done), (e.rays() - rays) as f64 / done.max(1) as f64)
+        })
+        .collect();
+    let plain: Vec<(Vec<f64>, f64)> = tail[..n]
+        .par_iter_mut()
+        .map(|e| {
+            let buffer = SharedSplats::coarse(w, h, shift);
+            let rays = e.rays();
+            let done = e.replicas.chains[0].run(&e.replicas.targets[0], sweeps, Some(&buffer), stop);
+            (blocks(std::slice::from_ref(&buffer), scale, done), (e.rays() - rays) as f64 / done.max(1) as f64)
+        })
+        .collect();
+    if stop() {
+        return None;
+    }
+    let cells = tempered[0].0.len();
+    let mean: Vec<f64> =
+        (0..cells).map(|c| tempered.iter().chain(&plain).map(|r| r.0[c]).sum::<f64>() / (2 * n) as f64).collect();
+    // The error per ray of a kind's walkers.
+    let cost = |runs: &[(Vec<f64>, f64)]| {
+        let n = runs.len() as f64;
+        let spread: f64 = (0..cells)
+            .map(|c| {
+                let m = runs.iter().map(|r| r.0[c]).sum::<f64>() / n;
+                let var = runs.iter().map(|r| (r.0[c] - m).powi(2)).sum::<f64>() / (n - 1.0);
+                var / (mean[c] * mean[c] + 0.01)
+            })
+            .sum();
+        spread * runs.iter().map(|r| r.1).sum::<f64>() / n
+    };
+    Some(cost(&tempered) < cost(&plain))
+}
+
+/// Block luminances of a pilot walker's coarse images (summed over its layers) as the render
+/// would scale them after `mutations` main-chain mutations.
+fn blocks(buffers: &[SharedSplats], scale: f64, mutations: u64) -> Vec<f64> {
+    let scale = scale / mutations.max(1) as f64;
+    let mut sums: Vec<f64> = Vec::new();
+    for b in buffers {
+        let image = b.image(1.0);
+        sums.resize(image.pixels.len(), 0.0);
+        for (s, p) in sums.iter_mut().zip(&image.pixels) {
+            *s += f64::from(crate::math::luminance(*p)) * scale;
+        }
+    }
+    sums
 }
 
 /// Every ensemble of a depth keeps replica 0 alone, as a plain MMLT chain: the replicas barely

@@ -6,9 +6,7 @@ use super::{
     Ensemble, EnsembleSettings, EquiEnergy, Neighbor, Permutation, Replicas, SwapKernel, Tuning, TuningMethod,
 };
 use crate::bidir::{Heuristic, Tempering};
-use crate::integrator::{
-    Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap,
-};
+use crate::integrator::{Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap};
 use crate::math::rng::{Pcg32, hash};
 use crate::mcmc::{ChainSettings, StartContext, TemperedTarget};
 use crate::scene::Scene;
@@ -42,6 +40,9 @@ pub struct TemperedIntegrator {
     /// (its hot replicas' targets are far from the main one: their reused samples and their
     /// swaps buy less than their rays cost); `None`: never.
     pub collapse_below: Option<f64>,
+    /// Sweeps of the pilot that decides, per depth, whether its ensembles pay for their
+    /// replicas (measured against plain MMLT chains; 0: ensembles at every depth).
+    pub pilot: u64,
     /// Recompute MIS weights from the roughened densities (default: keep the scene's, which
     /// measured better at equal time on the default scene; see the README).
     pub roughen_mis: bool,
@@ -82,6 +83,7 @@ impl TemperedIntegrator {
             max_temperature: 1.0,
             collapse_above: None,
             collapse_below: None,
+            pilot: 0,
             roughen_mis: false,
             tuning: LadderTuning::Bootstrap,
             burn_in: 500,
@@ -105,6 +107,7 @@ impl TemperedIntegrator {
             max_temperature: 1.0,
             collapse_above: None,
             collapse_below: None,
+            pilot: 0,
             swap_target: 0.234,
             reuse_replicas: false,
             ..Self::new(max_depth)
@@ -148,6 +151,7 @@ impl TemperedIntegrator {
             }),
             collapse_above: self.collapse_above,
             collapse_below: self.collapse_below,
+            pilot: self.pilot,
         }
     }
 

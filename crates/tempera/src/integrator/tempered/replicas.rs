@@ -114,9 +114,14 @@ impl<'a> Replicas<'a> {
         }
     }
 
-    /// Keeps replica 0 alone: the ensemble becomes a plain MMLT chain.
+    /// Keeps replica 0 alone: the ensemble becomes a plain MMLT chain (which keeps the count of
+    /// the rays the others traced).
     pub fn collapse(&mut self) {
+        let dropped: u64 = self.chains.iter().skip(1).map(Chain::rays).sum();
         self.chains.truncate(1);
         self.targets.truncate(1);
+        if let Some(chain) = self.chains.first_mut() {
+            chain.count_rays(dropped);
+        }
     }
 }
