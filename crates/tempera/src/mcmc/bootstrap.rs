@@ -26,20 +26,26 @@ pub fn sampler_for(seed: u64, k: usize, i: usize, settings: &ChainSettings) -> P
 pub struct Scratch<S> {
     paths: Paths,
     state: S,
+    /// The last sampler evaluated, whose storage the next one takes over.
+    spare: Option<PssSampler>,
 }
 
 impl<S: State> Default for Scratch<S> {
     fn default() -> Self {
-        Self { paths: Paths::default(), state: S::default() }
+        Self { paths: Paths::default(), state: S::default(), spare: None }
     }
 }
 
 impl<S: State> Scratch<S> {
     /// Evaluates the state `sampler` holds under `target`; returns it and the rays traced.
-    pub fn evaluate(&mut self, target: &impl Target<State = S>, sampler: PssSampler) -> (&mut S, u64) {
+    pub fn evaluate(&mut self, target: &impl Target<State = S>, mut sampler: PssSampler) -> (&mut S, u64) {
+        if let Some(spare) = self.spare.take() {
+            sampler.reuse_storage(spare);
+        }
         let mut cx = EvalContext { sampler, paths: std::mem::take(&mut self.paths), rays: 0 };
         self.state = target.evaluate(&mut cx, std::mem::take(&mut self.state));
         self.paths = cx.paths;
+        self.spare = Some(cx.sampler);
         (&mut self.state, cx.rays)
     }
 }

@@ -101,6 +101,17 @@ impl PssSampler {
         }
     }
 
+    /// Takes over the storage of `old`'s entries (emptied) if this sampler has none yet: a
+    /// bootstrap evaluates many fresh samplers one after another, and each would otherwise
+    /// allocate and grow its own. The state is unchanged (a fresh sampler holds no entries).
+    pub fn reuse_storage(&mut self, old: PssSampler) {
+        if self.entries.is_empty() {
+            let mut entries = old.entries;
+            entries.clear();
+            self.entries = entries;
+        }
+    }
+
     /// Begins a proposal: decides between a large and a small step.
     pub fn start_iteration(&mut self) {
         self.iteration += 1;
