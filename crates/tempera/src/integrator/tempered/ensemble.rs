@@ -244,11 +244,7 @@ impl Walker for Ensemble<'_> {
                 // replica's own layer (normalised by its own b_l).
                 let Replicas { chains, targets } = &mut self.replicas;
                 for (j, (chain, layer)) in chains.iter_mut().zip(splats).enumerate() {
-                    chain.state_mut().note_own_value(j, targets.len());
-                    let scale = reuse.scale(targets, chain.state_mut());
-                    if scale > 0.0 {
-                        chain.state().splat(layer, scale);
-                    }
+                    splat_reused(reuse, targets, chain.state_mut(), j, 1.0, layer);
                 }
             }
             done += 1;
@@ -394,26 +390,25 @@ fn ensembles_pay(
     let (w, h) = (film.width, film.height);
     let shift = w.max(h).div_ceil(8).max(1).next_power_of_two().trailing_zeros();
     let scale = b0 * f64::from(w) * f64::from(h) / f64::from(1u32 << (2 * shift));
+    // Each walker's block luminances and rays per main-chain mutation, running as `run` says
+    // into `layers` coarse buffers of its own.
+    let measure =
+        |walkers: &mut [Ensemble], layers: usize, run: &(dyn Fn(&mut Ensemble, &[SharedSplats]) -> u64 + Sync)| {
+            walkers
+                .par_iter_mut()
+                .map(|e| {
+                    let buffers: Vec<SharedSplats> = (0..layers).map(|_| SharedSplats::coarse(w, h, shift)).collect();
+                    let rays = e.rays();
+                    let done = run(e, &buffers);
+                    (blocks(&buffers, scale, done), (e.rays() - rays) as f64 / done.max(1) as f64)
+                })
+                .collect::<Vec<(Vec<f64>, f64)>>()
+        };
     let (head, tail) = ensembles.split_at_mut(n);
-    let layers = shared.count();
-    let tempered: Vec<(Vec<f64>, f64)> = head
-        .par_iter_mut()
-        .map(|e| {
-            let buffers: Vec<SharedSplats> = (0..layers).map(|_| SharedSplats::coarse(w, h, shift)).collect();
-            let rays = e.rays();
-            let done = e.run(shared, sweeps, &buffers, stop);
-            (blocks(&buffers, scale, done), (e.rays() - rays) as f64 / done.max(1) as f64)
-        })
-        .collect();
-    let plain: Vec<(Vec<f64>, f64)> = tail[..n]
-        .par_iter_mut()
-        .map(|e| {
-            let buffer = SharedSplats::coarse(w, h, shift);
-            let rays = e.rays();
-            let done = e.replicas.chains[0].run(&e.replicas.targets[0], sweeps, Some(&buffer), stop);
-            (blocks(std::slice::from_ref(&buffer), scale, done), (e.rays() - rays) as f64 / done.max(1) as f64)
-        })
-        .collect();
+    let tempered = measure(head, shared.count(), &|e, buffers| e.run(shared, sweeps, buffers, stop));
+    let plain = measure(&mut tail[..n], 1, &|e, buffers| {
+        e.replicas.chains[0].run(&e.replicas.targets[0], sweeps, Some(&buffers[0]), stop)
+    });
     if stop() {
         return None;
     }
