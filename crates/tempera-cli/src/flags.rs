@@ -5,7 +5,7 @@
 use clap::Args;
 use tempera::bidir::Heuristic;
 use tempera::integrator::{
-    Allocation, IntegratorSettings, LadderTuning, PhotonSampler, ReplicaSplats, Swap, TemperedMis,
+    Allocation, Flattening, IntegratorSettings, LadderTuning, PhotonSampler, ReplicaSplats, Swap, TemperedMis,
 };
 
 /// The flags of `tempera render` that set up the integrator. They are parsed as plain values;
@@ -88,6 +88,11 @@ pub struct IntegratorFlags {
     /// the current state after each swap step (states).
     #[arg(long, value_enum)]
     pub replica_splats: Option<ReplicaSplats>,
+    /// Tempered MMLT: how the hot replicas' targets are flattened: the connection vertices'
+    /// GGX lobes roughened (default: roughen), or the scene's value raised to the power
+    /// `1 − τ` (power).
+    #[arg(long, value_enum)]
+    pub flattening: Option<Flattening>,
     /// Tempered MMLT: sweeps (one mutation per replica) between swap steps.
     #[arg(long)]
     pub swap_every: Option<u64>,
@@ -142,6 +147,7 @@ impl IntegratorFlags {
                 _ => None,
             },
             replica_splats: self.replica_splats,
+            flattening: self.flattening,
             swap_every: self.swap_every,
             hot_every: self.hot_every,
             paper: self.paper.then_some(true),

@@ -25,7 +25,7 @@ pub use path::PathIntegrator;
 pub use pssmlt::PssmltIntegrator;
 pub use run_stats::RunStats;
 pub use settings::{
-    Allocation, IntegratorKind, IntegratorSettings, LadderTuning, ReplicaSplats, Swap, TemperedMis, create,
+    Allocation, Flattening, IntegratorKind, IntegratorSettings, LadderTuning, ReplicaSplats, Swap, TemperedMis, create,
 };
 pub use sppm::{PhotonSampler, SppmIntegrator};
 pub use tempered::TemperedIntegrator;

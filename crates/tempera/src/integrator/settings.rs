@@ -9,6 +9,7 @@ use super::{
 use crate::bidir::Heuristic;
 use crate::integrator::sppm::PhotonSampler;
 use crate::integrator::tempered::Permutation;
+pub use crate::mcmc::Flattening;
 use crate::scene::RenderDefaults;
 use serde::{Deserialize, Serialize};
 
@@ -196,6 +197,9 @@ pub struct IntegratorSettings {
     /// Tempered MMLT: with reuse, which of each replica's states splat.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replica_splats: Option<ReplicaSplats>,
+    /// Tempered MMLT: how the hot replicas' targets are flattened.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flattening: Option<Flattening>,
     /// Tempered MMLT: sweeps between swap steps.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub swap_every: Option<u64>,
@@ -264,6 +268,7 @@ impl IntegratorSettings {
             ("reuse_replicas", self.reuse_replicas.is_some(), tempered),
             ("pilot", self.pilot.is_some(), tempered),
             ("replica_splats", self.replica_splats.is_some(), tempered),
+            ("flattening", self.flattening.is_some(), tempered),
             ("swap_every", self.swap_every.is_some(), tempered),
             ("hot_every", self.hot_every.is_some(), tempered),
             ("paper", self.paper.is_some(), tempered),
@@ -287,6 +292,7 @@ impl IntegratorSettings {
                 ("reuse_replicas", self.reuse_replicas.is_some()),
                 ("allocation", self.allocation.is_some()),
                 ("max_temperature", self.max_temperature.is_some()),
+                ("flattening", self.flattening.is_some()),
                 ("collapse_above", self.collapse_above.is_some()),
                 ("collapse_below", self.collapse_below.is_some()),
                 ("pilot", self.pilot.is_some()),
@@ -309,6 +315,11 @@ impl IntegratorSettings {
         check_probability("collapse_above", self.collapse_above)?;
         check_probability("collapse_below", self.collapse_below)?;
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
+        if self.flattening == Some(Flattening::Power) && self.max_temperature.is_some_and(|t| t > 1.0) {
+            return Err(
+                "a power flattening reaches the uniform target at temperature 1; max_temperature must be 1".into()
+            );
+        }
         check_range("swap_every", self.swap_every, 1..=1_000_000)?;
         check_range("hot_every", self.hot_every, 1..=1_000_000)?;
         check_range("pilot", self.pilot, 0..=10_000_000)?;
@@ -408,6 +419,7 @@ pub fn create(
                 swap_target: s.swap_target.unwrap_or(m.swap_target),
                 reuse_replicas: s.reuse_replicas.unwrap_or(m.reuse_replicas),
                 replica_splats: s.replica_splats.unwrap_or(m.replica_splats),
+                flattening: s.flattening.unwrap_or(m.flattening),
                 swap_every: s.swap_every.unwrap_or(m.swap_every),
                 hot_every: s.hot_every.unwrap_or(m.hot_every),
                 ..m

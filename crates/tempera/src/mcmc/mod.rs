@@ -20,4 +20,4 @@ pub use driver::{ChainSettings, GroupContext, Layers, OneLayer, Single, StartCon
 pub use full::{FullContribution, evaluate_full};
 pub use stats::{DepthStats, Moments, SwapStats};
 pub use strategy::{Contribution, Evaluated, evaluate, evaluate_connection, valid_radiance};
-pub use tempered::{TemperedState, TemperedTarget};
+pub use tempered::{Flattening, TemperedState, TemperedTarget};

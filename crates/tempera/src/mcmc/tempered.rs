@@ -72,23 +72,44 @@ impl State for TemperedState {
     }
 }
 
-/// The target of one replica of depth `depth` at temperature `τ`: for `τ ≤ 1` the scene with
-/// the connection vertices roughened by `a = τ`; beyond, the fully roughened value raised to
-/// `β = 1/τ` (a flatter target where roughening alone saturates: every lobe at `α = 1`).
+/// How the targets of hot replicas are flattened.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Flattening {
+    /// For `τ ≤ 1` the scene with the connection vertices roughened by `a = τ`; beyond, the
+    /// fully roughened value raised to `β = 1/τ` (a flatter target where roughening alone
+    /// saturates: every lobe at `α = 1`).
+    #[default]
+    Roughen,
+    /// The scene's own value raised to `β = 1 − τ` (`τ ≤ 1`; at 1 the target is uniform over
+    /// the paths that carry light): the classic tempered target of parallel tempering, which
+    /// flattens every path, diffuse or glossy, and keeps its modes where they are.
+    Power,
+}
+
+/// The target of one replica of depth `depth` at temperature `τ`, flattened as
+/// [`Flattening`] says.
 #[derive(Clone, Copy)]
 pub struct TemperedTarget<'a> {
     pub scene: &'a Scene,
     pub depth: usize,
-    /// The roughening `a = min(τ, 1)` and how the roughened weights are computed.
+    /// The roughening `a` and how the roughened weights are computed.
     pub temper: Tempering,
     /// The temperature `τ` (0: the scene itself).
     tau: f32,
+    flattening: Flattening,
 }
 
 impl<'a> TemperedTarget<'a> {
     /// The target of depth `depth` at temperature `tau`.
     pub fn new(scene: &'a Scene, depth: usize, temper: Tempering, tau: f32) -> Self {
-        let mut target = Self { scene, depth, temper, tau: 0.0 };
+        Self::flattened(scene, depth, temper, tau, Flattening::Roughen)
+    }
+
+    /// The target of depth `depth` at temperature `tau`, flattened as `flattening` says.
+    pub fn flattened(scene: &'a Scene, depth: usize, temper: Tempering, tau: f32, flattening: Flattening) -> Self {
+        let mut target = Self { scene, depth, temper, tau: 0.0, flattening };
         target.set_temperature(tau);
         target
     }
@@ -99,11 +120,18 @@ impl<'a> TemperedTarget<'a> {
 
     pub fn set_temperature(&mut self, tau: f32) {
         self.tau = tau;
-        self.temper.a = tau.min(1.0);
+        self.temper.a = match self.flattening {
+            Flattening::Roughen => tau.min(1.0),
+            Flattening::Power => 0.0,
+        };
     }
 
     /// The value of `state` (evaluated under any replica's target) under this target; no rays.
     pub fn value_of(&self, state: &mut TemperedState) -> f32 {
+        if self.flattening == Flattening::Power && self.tau > 0.0 {
+            let f = state.contribution.f;
+            return if f > 0.0 { f.powf(1.0 - self.tau.min(1.0)) } else { 0.0 };
+        }
         if self.temper.a <= 0.0 {
             return state.contribution.f;
         }
@@ -148,26 +176,29 @@ mod tests {
         let mut scene = crate::scenes::default_scene().build().unwrap();
         scene.set_resolution(32, 32);
         let ladder = [0.0, 0.05, 0.2, 0.6, 1.0, 4.0];
-        let target = |depth, a, roughen_mis| {
-            TemperedTarget::new(&scene, depth, Tempering { a, heuristic: Heuristic::Power, roughen_mis }, a)
-        };
         let (mut nonzero, mut differs) = (0, 0);
-        for roughen_mis in [true, false] {
+        for (roughen_mis, flattening) in
+            [(true, Flattening::Roughen), (false, Flattening::Roughen), (false, Flattening::Power)]
+        {
+            let target = |depth, a: f32| {
+                let temper = Tempering { a, heuristic: Heuristic::Power, roughen_mis };
+                TemperedTarget::flattened(&scene, depth, temper, a.min(1.0), flattening)
+            };
             for i in 0..4000u64 {
                 let depth = 1 + (i % 4) as usize;
                 let j = (i / 4 % 6) as usize;
                 let fresh = || EvalContext::new(PssSampler::new(i, 0, 0.01, 0.3));
-                let mut state = target(depth, ladder[j], roughen_mis).evaluate(&mut fresh(), TemperedState::default());
+                let mut state = target(depth, ladder[j]).evaluate(&mut fresh(), TemperedState::default());
                 // Replica 0's view is MMLT's target, bit for bit.
                 let mmlt = evaluate(&scene, depth, &mut fresh());
                 assert_eq!(state.contribution, mmlt);
                 // Re-evaluating the cached state under its own target reproduces its value.
                 let cached = state.value;
-                assert_eq!(target(depth, ladder[j], roughen_mis).value_of(&mut state).to_bits(), cached.to_bits());
+                assert_eq!(target(depth, ladder[j]).value_of(&mut state).to_bits(), cached.to_bits());
                 // Cross-evaluations equal fresh evaluations under the other targets.
                 for &a in &ladder {
-                    let other = target(depth, a, roughen_mis).evaluate(&mut fresh(), TemperedState::default());
-                    let cross = target(depth, a, roughen_mis).value_of(&mut state);
+                    let other = target(depth, a).evaluate(&mut fresh(), TemperedState::default());
+                    let cross = target(depth, a).value_of(&mut state);
                     assert_eq!(cross.to_bits(), other.value.to_bits(), "state {i}, a = {a}");
                     nonzero += usize::from(cross > 0.0);
                     differs += usize::from(cross != state.contribution.f);

@@ -292,7 +292,7 @@ impl Walker for Ensemble<'_> {
             Some((tuning, TuningMethod::Bootstrap)) => {
                 // The bootstrap valued under every candidate temperature; the ladder chosen
                 // from it keeps the columns of its rungs.
-                let grid = candidate_temperatures(tuning.max_temperature);
+                let grid = candidate_temperatures(tuning.max_temperature, tuning.flattening);
                 let candidates: Vec<TemperedTarget> = grid
                     .iter()
                     .map(|&tau| {

@@ -8,7 +8,7 @@ use super::{
 use crate::bidir::{Heuristic, Tempering};
 use crate::integrator::{Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap};
 use crate::math::rng::{Pcg32, hash};
-use crate::mcmc::{ChainSettings, StartContext, TemperedTarget};
+use crate::mcmc::{ChainSettings, Flattening, StartContext, TemperedTarget};
 use crate::scene::Scene;
 
 /// Rings of the equi-energy strategy.
@@ -59,6 +59,8 @@ pub struct TemperedIntegrator {
     /// With reuse, which of each replica's states splat (default: proposals and current
     /// states with their expected weights; see the README).
     pub replica_splats: ReplicaSplats,
+    /// How the hot replicas' targets are flattened (default: roughening, the paper's).
+    pub flattening: Flattening,
     /// Sweeps between swap steps (1: a swap step after every sweep).
     pub swap_every: u64,
     /// Sweeps between mutations of replicas `1 … K−1` (1: every replica mutates every sweep).
@@ -90,6 +92,7 @@ impl TemperedIntegrator {
             swap_target: 0.234,
             reuse_replicas: true,
             replica_splats: ReplicaSplats::Expected,
+            flattening: Flattening::Roughen,
             swap_every: 1,
             hot_every: 1,
         }
@@ -105,6 +108,7 @@ impl TemperedIntegrator {
             tuning: LadderTuning::BurnIn,
             spread_allocation: false,
             max_temperature: 1.0,
+            flattening: Flattening::Roughen,
             collapse_above: None,
             collapse_below: None,
             pilot: 0,
@@ -148,6 +152,7 @@ impl TemperedIntegrator {
                 method,
                 target: self.swap_target,
                 max_temperature: self.max_temperature,
+                flattening: self.flattening,
             }),
             collapse_above: self.collapse_above,
             collapse_below: self.collapse_below,
@@ -167,7 +172,7 @@ impl TemperedIntegrator {
         };
         let mut replicas = Replicas { chains: Vec::with_capacity(ladder.len()), targets: Vec::new() };
         for (j, &a) in ladder.iter().enumerate() {
-            let target = TemperedTarget::new(scene, k, self.tempering(), a);
+            let target = TemperedTarget::flattened(scene, k, self.tempering(), a, self.flattening);
             let rng =
                 if j == 0 { cx.rng.clone() } else { Pcg32::new(hash(&[seed, 0x7e4b, k as u64, c as u64]), j as u64) };
             replicas.chains.push(cx.start_chain(&target, rng));
@@ -199,7 +204,7 @@ impl Integrator for TemperedIntegrator {
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_spread_allocation(self.spread_allocation);
         let ladder = self.ladder();
-        let main = |depth| TemperedTarget::new(scene, depth, self.tempering(), 0.0);
+        let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
         chains.render(scene, settings, control, depths, main, |cx| self.start_ensemble(scene, &ladder, cx))
     }

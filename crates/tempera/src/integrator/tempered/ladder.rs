@@ -28,6 +28,7 @@
 //! connections are mostly diffuse the acceptance stays above `α*` even at the cap.
 
 use super::ensemble::Ensemble;
+use crate::mcmc::Flattening;
 use rayon::prelude::*;
 
 /// Ensembles of a depth that tune its ladder in lockstep; the others take the result.
@@ -49,6 +50,8 @@ pub struct Tuning {
     pub target: f64,
     /// The highest temperature the ladder may reach (1: roughening only).
     pub max_temperature: f32,
+    /// How the temperatures flatten the target (which decides the candidates).
+    pub flattening: Flattening,
 }
 
 /// How far temperatures beyond 1 are spaced in the tuner's coordinate: a unit step there
@@ -154,9 +157,21 @@ pub fn tune_together(
 
 /// The temperatures a ladder tuned from the bootstrap chooses from: 0, then roughenings from
 /// 0.004 growing by a quarter up to 1, then (up to `max_temperature`) powers spaced by an
-/// eighth in the tuner's coordinate (`τ` growing by `e^{1/2}` each).
-pub fn candidate_temperatures(max_temperature: f32) -> Vec<f32> {
+/// eighth in the tuner's coordinate (`τ` growing by `e^{1/2}` each). With a power flattening
+/// (`f^{1−τ}`) the exponents `β = 1 − τ` shrink by 15 % from one candidate to the next down
+/// to 0.002, then 0 (`τ = 1`): the acceptance follows `β` geometrically, and a grid in `τ`
+/// would leave `β` between 0.15 and 0 without a candidate.
+pub fn candidate_temperatures(max_temperature: f32, flattening: Flattening) -> Vec<f32> {
     let mut grid = vec![0.0f32];
+    if flattening == Flattening::Power {
+        let mut beta = 0.85f32;
+        while beta > 0.002 {
+            grid.push(1.0 - beta);
+            beta *= 0.85;
+        }
+        grid.push(1.0);
+        return grid;
+    }
     let mut a = 0.004f32;
     while a < 0.95 {
         grid.push(a);

@@ -313,8 +313,13 @@ mod integrator {
         let lazy = TemperedIntegrator { hot_every: 4, ..base.clone() };
         // Every depth's estimated acceptance lies below 0.999: all collapse.
         let below = TemperedIntegrator { collapse_below: Some(0.999), ..base.clone() };
+        // Powers of the scene's own value, tuned from the bootstrap: a hotter target than any
+        // roughening (the uniform one at τ = 1), reused with the balance heuristic.
+        let power = TemperedIntegrator { flattening: Flattening::Power, replicas: 3, ..base.clone() };
         let every_sweep = base.render(&scene, &settings(256, 2, 0), &control).unwrap().stats.rays;
-        for (name, t) in [("hot", hot), ("collapsed", collapsed), ("collapsed below", below), ("lazy", lazy)] {
+        let cases =
+            [("hot", hot), ("collapsed", collapsed), ("collapsed below", below), ("lazy", lazy), ("power", power)];
+        for (name, t) in cases {
             let out = t.render(&scene, &settings(256, 2, 0), &control).unwrap();
             assert_agrees(name, &out.image, &bdpt.image);
             if name == "lazy" {
@@ -331,6 +336,12 @@ mod integrator {
                         let same = d.ladder.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-4);
                         assert!(d.ladder.len() == 4 && same, "depth {}: ladder {:?}", d.depth, d.ladder);
                         assert!(d.prepare_seconds > 0.0, "depth {}: the calibration takes time", d.depth);
+                    }
+                    "power" => {
+                        let ladder = &d.ladder;
+                        assert!(ladder.len() == 3 && ladder[2] > ladder[1], "depth {}: {ladder:?}", d.depth);
+                        let ratios = &d.replica_b_ratios;
+                        assert!(ratios.len() == 3 && ratios.iter().all(|r| r.is_finite() && *r > 0.0), "{ratios:?}");
                     }
                     _ => assert!(d.ladder == vec![0.0] && d.swaps.is_none(), "depth {} not collapsed: {d:?}", d.depth),
                 }
