@@ -60,7 +60,7 @@ def render(
     Further keyword arguments are the integrator's settings as in experiment files
     (bootstrap, chains, large_step, allocation, replicas, swap, ladder, max_temperature,
     collapse_above, collapse_below, pilot, tuning, burn_in, swap_target, tempered_mis,
-    reuse_replicas, replica_splats, flattening, swap_every, hot_every, paper, mis, photons, radius,
+    reuse_replicas, replica_splats, flattening, swap_every, hot_every, hot_large_step, paper, mis, photons, radius,
     photon_sampler). Bad settings raise ValueError. Ctrl-C returns the image so far."""
 
 def compare(

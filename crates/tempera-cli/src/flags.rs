@@ -100,6 +100,10 @@ pub struct IntegratorFlags {
     /// sweep).
     #[arg(long)]
     pub hot_every: Option<u64>,
+    /// Tempered MMLT: the large-step probability of the hotter replicas (default: that of
+    /// replica 0, --large-step).
+    #[arg(long)]
+    pub hot_large_step: Option<f32>,
     /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly (five replicas at every depth, a
     /// roughness-only ladder tuned for 0.234, replica 0 alone writes the image).
     #[arg(long)]
@@ -150,6 +154,7 @@ impl IntegratorFlags {
             flattening: self.flattening,
             swap_every: self.swap_every,
             hot_every: self.hot_every,
+            hot_large_step: self.hot_large_step,
             paper: self.paper.then_some(true),
             photons: self.photons,
             radius: self.radius,

@@ -206,6 +206,9 @@ pub struct IntegratorSettings {
     /// Tempered MMLT: sweeps between mutations of the replicas above replica 0.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hot_every: Option<u64>,
+    /// Tempered MMLT: the large-step probability of the replicas above replica 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hot_large_step: Option<f32>,
     /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly — five replicas at every depth,
     /// a roughness-only ladder tuned for a neighbour acceptance of 0.234, replica 0 alone
     /// writing the image (the swap strategy stays free).
@@ -271,6 +274,7 @@ impl IntegratorSettings {
             ("flattening", self.flattening.is_some(), tempered),
             ("swap_every", self.swap_every.is_some(), tempered),
             ("hot_every", self.hot_every.is_some(), tempered),
+            ("hot_large_step", self.hot_large_step.is_some(), tempered),
             ("paper", self.paper.is_some(), tempered),
             ("photons", self.photons.is_some(), kind == Sppm),
             ("radius", self.radius.is_some(), kind == Sppm),
@@ -306,6 +310,7 @@ impl IntegratorSettings {
         check_range("bootstrap", self.bootstrap, 1..=100_000_000)?;
         check_range("chains", self.chains, 1..=1_000_000)?;
         check_probability("large_step", self.large_step.map(f64::from))?;
+        check_probability("hot_large_step", self.hot_large_step.map(f64::from))?;
         check_range("replicas", self.replicas, 1..=32)?;
         check_range("burn_in", self.burn_in, 1..=10_000_000)?;
         if self.burn_in.is_some() && self.tuning.is_some_and(|t| t != LadderTuning::BurnIn) {
@@ -422,6 +427,7 @@ pub fn create(
                 flattening: s.flattening.unwrap_or(m.flattening),
                 swap_every: s.swap_every.unwrap_or(m.swap_every),
                 hot_every: s.hot_every.unwrap_or(m.hot_every),
+                hot_large_step: s.hot_large_step.or(m.hot_large_step),
                 ..m
             })
         }

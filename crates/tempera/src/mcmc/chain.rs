@@ -94,9 +94,21 @@ impl<S: State> Chain<S> {
 
     /// Replaces this chain by `fresh`, keeping the count of rays traced by both.
     pub fn restart(&mut self, fresh: Chain<S>) {
-        let rays = self.cx.rays;
+        let (rays, p) = (self.cx.rays, self.large_step_probability());
         *self = fresh;
         self.cx.rays += rays;
+        self.set_large_step_probability(p);
+    }
+
+    /// The probability that this chain's proposals are large steps.
+    pub fn large_step_probability(&self) -> f32 {
+        self.cx.sampler.large_step_probability()
+    }
+
+    /// Sets the probability that this chain's proposals are large steps; it stays with the
+    /// chain when states are exchanged or restarted.
+    pub fn set_large_step_probability(&mut self, p: f32) {
+        self.cx.sampler.set_large_step_probability(p);
     }
 
     /// The current state.
@@ -109,10 +121,14 @@ impl<S: State> Chain<S> {
     }
 
     /// Exchanges the whole states (primary-sample vector with its stamps, and the evaluated
-    /// state) of two chains; each keeps its random numbers for acceptance and its statistics.
+    /// state) of two chains; each keeps its random numbers for acceptance, its statistics and
+    /// its large-step probability.
     pub fn exchange(&mut self, other: &mut Chain<S>) {
+        let (p, q) = (self.large_step_probability(), other.large_step_probability());
         std::mem::swap(&mut self.cx.sampler, &mut other.cx.sampler);
         std::mem::swap(&mut self.current, &mut other.current);
+        self.set_large_step_probability(p);
+        other.set_large_step_probability(q);
     }
 
     /// Makes up to `mutations` mutations, checking `stop` every 256, splatting into `splats`
@@ -208,5 +224,48 @@ impl<S: State> Chain<S> {
         } else {
             self.cx.sampler.reject();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bidir::{Heuristic, Tempering};
+    use crate::mcmc::TemperedTarget;
+    use crate::sampler::PssSampler;
+
+    /// Exchanging two chains' states moves the primary-sample vectors and evaluated states but
+    /// leaves each chain its large-step probability (a property of the replica's slot), and a
+    /// restarted chain keeps it too.
+    #[test]
+    fn exchanged_and_restarted_chains_keep_their_large_step_probability() {
+        let mut scene = crate::scenes::default_scene().build().unwrap();
+        scene.set_resolution(16, 16);
+        let target =
+            TemperedTarget::new(&scene, 2, Tempering { a: 0.0, heuristic: Heuristic::Power, roughen_mis: false }, 0.0);
+        let start = |seed| {
+            let mut seed = seed;
+            loop {
+                let chain = Chain::start(&target, PssSampler::new(seed, 0, 0.01, 0.3), Pcg32::new(seed, 1), 2);
+                if chain.state().value() > 0.0 {
+                    return chain;
+                }
+                seed += 100;
+            }
+        };
+        let (mut a, mut b) = (start(1), start(2));
+        b.set_large_step_probability(1.0);
+        let (va, vb) = (a.state().value(), b.state().value());
+        assert_ne!(va, vb);
+        a.exchange(&mut b);
+        assert_eq!((a.state().value(), b.state().value()), (vb, va));
+        assert_eq!((a.large_step_probability(), b.large_step_probability()), (0.3, 1.0));
+        b.restart(start(3));
+        assert_eq!(b.large_step_probability(), 1.0);
+        // Every proposal of a chain with probability 1 is a large step.
+        for _ in 0..50 {
+            b.mutate(&target, None);
+        }
+        assert_eq!(b.stats.large_steps_proposed, 50);
     }
 }

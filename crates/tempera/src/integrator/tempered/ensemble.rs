@@ -44,6 +44,10 @@ pub struct EnsembleSettings {
     /// ensemble's product target; fewer hot mutations make an ensemble cheaper while its
     /// main chain keeps its pace.
     pub hot_every: u64,
+    /// The large-step probability of replicas `1 … K−1` (`None`: replica 0's). Any fixed
+    /// mixture of large and small steps leaves a replica's target invariant; hot targets are
+    /// flatter, so independent proposals are accepted there more often.
+    pub hot_large_step: Option<f32>,
     /// The ladder's burn-in, if it is to be tuned.
     pub tuning: Option<Tuning>,
     /// Run plain MMLT chains when the tuned ladder's neighbour acceptance stays above this.
@@ -95,6 +99,12 @@ impl Layers for EnsembleGroup {
 impl<'a> Ensemble<'a> {
     pub fn new(replicas: Replicas<'a>, kernel: SwapKernel, settings: EnsembleSettings, rng: Pcg32) -> Self {
         let k = replicas.len();
+        let mut replicas = replicas;
+        if let Some(p) = settings.hot_large_step {
+            for chain in replicas.chains.iter_mut().skip(1) {
+                chain.set_large_step_probability(p);
+            }
+        }
         Self {
             replicas,
             kernel,

@@ -65,6 +65,8 @@ pub struct TemperedIntegrator {
     pub swap_every: u64,
     /// Sweeps between mutations of replicas `1 … K−1` (1: every replica mutates every sweep).
     pub hot_every: u64,
+    /// Large-step probability of replicas `1 … K−1` (`None`: [`Self::large_step_probability`]).
+    pub hot_large_step: Option<f32>,
 }
 
 impl TemperedIntegrator {
@@ -95,6 +97,7 @@ impl TemperedIntegrator {
             flattening: Flattening::Roughen,
             swap_every: 1,
             hot_every: 1,
+            hot_large_step: None,
         }
     }
 
@@ -148,6 +151,7 @@ impl TemperedIntegrator {
             replica_splats: self.replica_splats,
             swap_every: self.swap_every.max(1),
             hot_every: self.hot_every.max(1),
+            hot_large_step: self.hot_large_step,
             tuning: method.filter(|_| tune).map(|method| Tuning {
                 method,
                 target: self.swap_target,

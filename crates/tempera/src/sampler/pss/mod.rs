@@ -125,6 +125,16 @@ impl PssSampler {
         self.large_step = large;
     }
 
+    /// The probability that a proposal is a large step.
+    pub fn large_step_probability(&self) -> f32 {
+        self.large_step_probability
+    }
+
+    /// Changes the probability that a proposal is a large step.
+    pub fn set_large_step_probability(&mut self, p: f32) {
+        self.large_step_probability = p;
+    }
+
     /// Changes the width of small steps (an adaptive chain's mutation size); zero re-proposes
     /// the current state.
     pub fn set_sigma(&mut self, sigma: f32) {

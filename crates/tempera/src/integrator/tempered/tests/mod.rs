@@ -300,8 +300,9 @@ mod integrator {
     }
 
     /// Temperatures past the roughness cap (powers `f^{1/τ}` of the fully roughened target),
-    /// depths collapsed to plain MMLT chains and hot replicas that mutate every fourth sweep
-    /// leave the image unbiased; the last trace fewer rays for the same main-chain mutations.
+    /// depths collapsed to plain MMLT chains, hot replicas that mutate every fourth sweep and
+    /// power-flattened replicas (with small steps, or with independent proposals only) leave
+    /// the image unbiased; the lazy ones trace fewer rays for the same main-chain mutations.
     #[test]
     fn hot_replicas_and_collapsed_depths_agree_with_bdpt() {
         let (scene, bdpt) = default_scene_and_bdpt();
@@ -316,9 +317,17 @@ mod integrator {
         // Powers of the scene's own value, tuned from the bootstrap: a hotter target than any
         // roughening (the uniform one at τ = 1), reused with the balance heuristic.
         let power = TemperedIntegrator { flattening: Flattening::Power, replicas: 3, ..base.clone() };
+        // Hot replicas that propose only large steps (independent uniform samples).
+        let independent = TemperedIntegrator { hot_large_step: Some(1.0), ..power.clone() };
         let every_sweep = base.render(&scene, &settings(256, 2, 0), &control).unwrap().stats.rays;
-        let cases =
-            [("hot", hot), ("collapsed", collapsed), ("collapsed below", below), ("lazy", lazy), ("power", power)];
+        let cases = [
+            ("hot", hot),
+            ("collapsed", collapsed),
+            ("collapsed below", below),
+            ("lazy", lazy),
+            ("power", power),
+            ("independent", independent),
+        ];
         for (name, t) in cases {
             let out = t.render(&scene, &settings(256, 2, 0), &control).unwrap();
             assert_agrees(name, &out.image, &bdpt.image);
@@ -337,7 +346,7 @@ mod integrator {
                         assert!(d.ladder.len() == 4 && same, "depth {}: ladder {:?}", d.depth, d.ladder);
                         assert!(d.prepare_seconds > 0.0, "depth {}: the calibration takes time", d.depth);
                     }
-                    "power" => {
+                    "power" | "independent" => {
                         let ladder = &d.ladder;
                         assert!(ladder.len() == 3 && ladder[2] > ladder[1], "depth {}: {ladder:?}", d.depth);
                         let ratios = &d.replica_b_ratios;
