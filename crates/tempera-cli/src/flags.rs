@@ -123,13 +123,14 @@ pub struct IntegratorFlags {
 }
 
 impl IntegratorFlags {
-    /// The typed settings these flags give (`strategy_images`: BDPT's per-strategy images
-    /// are asked for).
-    pub fn settings(&self, strategy_images: bool) -> IntegratorSettings {
+    /// The typed settings these flags give (the output options, per-strategy and per-depth
+    /// images, off).
+    pub fn settings(&self) -> IntegratorSettings {
         IntegratorSettings {
             maxdepth: self.maxdepth,
             mis: self.mis,
-            strategy_images,
+            strategy_images: false,
+            depth_images: false,
             bootstrap: self.bootstrap,
             chains: self.chains,
             large_step: self.large_step,

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 use tempera::accel::AccelKind;
 use tempera::cluster::Cluster;
-use tempera::integrator::{self, Budget, IntegratorKind, RenderSettings, RunStats};
+use tempera::integrator::{self, Budget, IntegratorKind, IntegratorSettings, RenderSettings, RunStats};
 use tempera::scene::Scene;
 use tempera_image::{WriteOptions, write_image};
 
@@ -56,6 +56,10 @@ pub struct RenderArgs {
     /// BDPT: write one EXR per strategy (s, t) with its MIS-weighted contribution into DIR.
     #[arg(long, value_name = "DIR")]
     pub strategy_images: Option<PathBuf>,
+    /// MMLT and tempered MMLT: write one EXR per path depth (`depth0.exr`, …), each that
+    /// depth's share of the image, into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub depth_images: Option<PathBuf>,
     #[command(flatten)]
     pub integrator_flags: IntegratorFlags,
     /// Treat scene-loading warnings (unknown directives, unused parameters, approximations) as
@@ -176,7 +180,14 @@ pub fn run_on(args: RenderArgs, cluster: &dyn Cluster) -> Result<()> {
     if args.strategy_images.is_some() && kind != IntegratorKind::Bdpt {
         bail!("--strategy-images needs --integrator bdpt");
     }
-    let settings = args.integrator_flags.settings(args.strategy_images.is_some());
+    if args.depth_images.is_some() && !matches!(kind, IntegratorKind::Mmlt | IntegratorKind::Tempered) {
+        bail!("--depth-images needs --integrator mmlt or tempered");
+    }
+    let settings = IntegratorSettings {
+        strategy_images: args.strategy_images.is_some(),
+        depth_images: args.depth_images.is_some(),
+        ..args.integrator_flags.settings()
+    };
     let integrator =
         integrator::create(kind, &settings, &scene.defaults).map_err(|e| anyhow::anyhow!("{kind}: {e}"))?;
     let budget = match args.time {
@@ -203,7 +214,7 @@ pub fn run_on(args: RenderArgs, cluster: &dyn Cluster) -> Result<()> {
     for path in &outputs {
         write_image(path, &out.image, &options)?;
     }
-    if let Some(dir) = &args.strategy_images {
+    if let Some(dir) = args.strategy_images.as_ref().or(args.depth_images.as_ref()) {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
         for (name, layer) in integrator.layer_names().iter().zip(&out.layers) {
             write_image(&dir.join(format!("{name}.exr")), layer, &options)?;

@@ -143,6 +143,26 @@ fn bdpt_writes_strategy_images() {
 }
 
 #[test]
+fn mmlt_writes_depth_images() {
+    let dir = scratch("depths");
+    let out = tempera()
+        .current_dir(&dir)
+        .args(["render", "--integrator", "mmlt", "--mpp", "2", "--maxdepth", "2", "--resolution", "16x16", "--quiet"])
+        .args(["--bootstrap", "2000", "-o", "img.exr", "--depth-images", "depths"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    for name in ["depth0", "depth1", "depth2"] {
+        assert!(dir.join("depths").join(format!("{name}.exr")).is_file(), "{name}");
+    }
+    assert!(!dir.join("depths/depth3.exr").exists());
+    assert_clean_error(
+        &["render", "--integrator", "bdpt", "--depth-images", "x"],
+        "--depth-images needs --integrator mmlt or tempered",
+    );
+}
+
+#[test]
 fn mmlt_renders_with_a_mutation_budget() {
     let dir = scratch("mmlt");
     let out = tempera()

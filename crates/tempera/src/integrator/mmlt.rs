@@ -20,6 +20,9 @@ pub struct MmltIntegrator {
     pub large_step_probability: f32,
     /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
     pub spread_allocation: bool,
+    /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
+    /// image.
+    pub depth_images: bool,
 }
 
 impl MmltIntegrator {
@@ -31,6 +34,7 @@ impl MmltIntegrator {
             sigma: 0.01,
             large_step_probability: 0.3,
             spread_allocation: false,
+            depth_images: false,
         }
     }
 }
@@ -60,6 +64,10 @@ impl Integrator for MmltIntegrator {
         "mmlt"
     }
 
+    fn layer_names(&self) -> Vec<String> {
+        depth_image_names(self.depth_images, self.max_depth)
+    }
+
     /// Renders; the statistics have one row per path depth.
     fn render(
         &self,
@@ -70,7 +78,8 @@ impl Integrator for MmltIntegrator {
         control.check_memory(self.memory_estimate(scene, settings.threads), "a splat buffer per path depth")?;
         let depths = self.max_depth as usize + 1;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
-            .with_spread_allocation(self.spread_allocation);
+            .with_spread_allocation(self.spread_allocation)
+            .with_group_images(self.depth_images);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.group.k;
@@ -80,6 +89,12 @@ impl Integrator for MmltIntegrator {
 
     fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {
         use crate::integrator::memory::{SHARED_SPLAT_BYTES, pixels};
-        pixels(scene).saturating_mul(12 + (u64::from(self.max_depth) + 1) * SHARED_SPLAT_BYTES)
+        let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
+        pixels(scene).saturating_mul(12 + images + (u64::from(self.max_depth) + 1) * SHARED_SPLAT_BYTES)
     }
+}
+
+/// The names of the per-depth images of a Markov-chain render (none unless asked for).
+pub(crate) fn depth_image_names(wanted: bool, max_depth: u32) -> Vec<String> {
+    if wanted { (0..=max_depth).map(|k| format!("depth{k}")).collect() } else { Vec::new() }
 }

@@ -141,6 +141,9 @@ pub struct IntegratorSettings {
     /// BDPT: also produce one image per strategy (an output option, not a setting of files).
     #[serde(skip)]
     pub strategy_images: bool,
+    /// MMLT and tempered MMLT: also produce one image per path depth (an output option).
+    #[serde(skip)]
+    pub depth_images: bool,
     /// Markov-chain integrators: bootstrap samples (per depth for MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bootstrap: Option<usize>,
@@ -254,6 +257,7 @@ impl IntegratorSettings {
         let given = [
             ("mis", self.mis.is_some(), kind == Bdpt),
             ("strategy_images", self.strategy_images, kind == Bdpt),
+            ("depth_images", self.depth_images, kind == Mmlt || tempered),
             ("bootstrap", self.bootstrap.is_some(), chain),
             ("chains", self.chains.is_some(), chain),
             ("large_step", self.large_step.is_some(), chain),
@@ -392,6 +396,7 @@ pub fn create(
                 chains: s.chains.unwrap_or(m.chains),
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
+                depth_images: s.depth_images,
                 ..m
             })
         }
@@ -428,6 +433,7 @@ pub fn create(
                 swap_every: s.swap_every.unwrap_or(m.swap_every),
                 hot_every: s.hot_every.unwrap_or(m.hot_every),
                 hot_large_step: s.hot_large_step.or(m.hot_large_step),
+                depth_images: s.depth_images,
                 ..m
             })
         }

@@ -41,6 +41,9 @@ pub struct ChainSettings {
     /// ([`Bootstrap::spread`]) instead of `b` alone: a group whose light is carried by a few
     /// rare paths (a caustic) mixes slowly and gets more.
     pub spread_allocation: bool,
+    /// Also develop one image per group (MMLT and tempering: per path depth) into
+    /// [`RenderOutput::layers`]; they sum to the image.
+    pub group_images: bool,
 }
 
 /// How a group's splat layers are normalised, decided when the group is prepared.
@@ -201,7 +204,12 @@ struct Group<L> {
 
 impl ChainSettings {
     pub fn new(bootstrap: usize, chains: usize, sigma: f32, large_step_probability: f32) -> Self {
-        Self { bootstrap, chains, sigma, large_step_probability, spread_allocation: false }
+        Self { bootstrap, chains, sigma, large_step_probability, spread_allocation: false, group_images: false }
+    }
+
+    /// These settings with one image per group developed beside the image when `on` is set.
+    pub fn with_group_images(self, on: bool) -> Self {
+        Self { group_images: on, ..self }
     }
 
     /// These settings with mutations allotted by `b` times spread when `spread` is set.
@@ -336,7 +344,7 @@ impl ChainSettings {
         let developed = |walkers: &[W], seconds: f64| {
             let reports = gather_reports(cluster, walkers, &plan, &prepared);
             let summed = cluster.is_distributed().then(|| sum_splats(cluster, &prepared));
-            let out = develop(&boots, &reports, &plan, &prepared, summed.as_deref(), (w, h));
+            let out = develop(&boots, &reports, &plan, &prepared, summed.as_deref(), (w, h), self.group_images);
             RenderOutput { stats: RenderStats { rays: out.stats.rays + total_rays, seconds, ..out.stats }, ..out }
         };
         match budget {
@@ -486,7 +494,9 @@ fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) -> Vec<Vec<
 /// The image and per-group statistics of the walkers' `reports` so far: statistics merged in
 /// walker order, each layer's normalisation `b_l` refined with the large-step proposals, each
 /// layer's splats (`summed` over the ranks, else the groups' own) scaled to estimate its share
-/// of the image per mutation. Rays count the walkers' rays only.
+/// of the image per mutation. Rays count the walkers' rays only. With `group_images`, each
+/// group's share of the image (its layers summed) is also returned, in group order.
+#[allow(clippy::too_many_arguments)]
 fn develop<L: Layers>(
     boots: &[Bootstrap],
     reports: &[Report],
@@ -494,6 +504,7 @@ fn develop<L: Layers>(
     groups: &[Option<Group<L>>],
     summed: Option<&[Vec<SharedSplats>]>,
     (w, h): (u32, u32),
+    group_images: bool,
 ) -> RenderOutput {
     let pixels = u64::from(w) * u64::from(h);
     let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.splats.len());
@@ -510,8 +521,12 @@ fn develop<L: Layers>(
         rays += report.rays;
     }
     let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
+    let mut per_group: Vec<Image> = Vec::new();
     let mut invalid = 0;
     for (k, d) in stats.iter_mut().enumerate() {
+        if group_images {
+            per_group.push(Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO));
+        }
         let boot = &boots[k];
         // A target's mean over its bootstrap and large-step samples.
         let refine = |mut prior: Moments, large: &Moments| {
@@ -548,6 +563,11 @@ fn develop<L: Layers>(
             for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
                 *p += *q;
             }
+            if let Some(own) = per_group.last_mut() {
+                for (p, q) in own.pixels.iter_mut().zip(&layer.pixels) {
+                    *p += *q;
+                }
+            }
         }
         if layer_b.len() > 1 {
             d.replica_b = layer_b;
@@ -562,5 +582,5 @@ fn develop<L: Layers>(
         seconds: 0.0,
         cancelled: false,
     };
-    RenderOutput { image, stats: stats_total, layers: Vec::new(), chains: stats }
+    RenderOutput { image, stats: stats_total, layers: per_group, chains: stats }
 }

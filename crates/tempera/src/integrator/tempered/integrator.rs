@@ -67,6 +67,9 @@ pub struct TemperedIntegrator {
     pub hot_every: u64,
     /// Large-step probability of replicas `1 … K−1` (`None`: [`Self::large_step_probability`]).
     pub hot_large_step: Option<f32>,
+    /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
+    /// image.
+    pub depth_images: bool,
 }
 
 impl TemperedIntegrator {
@@ -98,6 +101,7 @@ impl TemperedIntegrator {
             swap_every: 1,
             hot_every: 1,
             hot_large_step: None,
+            depth_images: false,
         }
     }
 
@@ -196,6 +200,10 @@ impl Integrator for TemperedIntegrator {
         "tempered"
     }
 
+    fn layer_names(&self) -> Vec<String> {
+        crate::integrator::mmlt::depth_image_names(self.depth_images, self.max_depth)
+    }
+
     /// Renders; the statistics carry ladders and swap statistics.
     fn render(
         &self,
@@ -206,7 +214,8 @@ impl Integrator for TemperedIntegrator {
         let bytes = self.memory_estimate(scene, settings.threads);
         control.check_memory(bytes, "a splat buffer per path depth and contributing replica")?;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
-            .with_spread_allocation(self.spread_allocation);
+            .with_spread_allocation(self.spread_allocation)
+            .with_group_images(self.depth_images);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
@@ -216,6 +225,7 @@ impl Integrator for TemperedIntegrator {
     fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {
         use crate::integrator::memory::{SHARED_SPLAT_BYTES, pixels};
         let layers = if self.reuse_replicas { self.replicas.max(1) } else { 1 } as u64;
-        pixels(scene).saturating_mul(12 + (u64::from(self.max_depth) + 1) * layers * SHARED_SPLAT_BYTES)
+        let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
+        pixels(scene).saturating_mul(12 + images + (u64::from(self.max_depth) + 1) * layers * SHARED_SPLAT_BYTES)
     }
 }
