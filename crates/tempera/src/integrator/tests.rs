@@ -340,64 +340,6 @@ fn bdpt_is_bit_identical_at_any_thread_count() {
     );
 }
 
-#[test]
-fn strategy_images_sum_to_the_bdpt_image() {
-    let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
-    let integrator = BdptIntegrator { strategy_images: true, ..BdptIntegrator::new(3) };
-    let out = render_with(&scene, &integrator, Budget::Samples(8), 4, 0);
-    let names = integrator.layer_names();
-    assert_eq!(names.len(), out.layers.len());
-    assert_eq!(names.len(), 2 + 3 + 4 + 5 - 1);
-    assert!(names.contains(&"s2_t1".to_owned()) && names.contains(&"s0_t5".to_owned()));
-    for (i, p) in out.image.pixels.iter().enumerate() {
-        let sum: Rgb = out.layers.iter().map(|l| l.pixels[i]).sum();
-        assert!((sum - *p).abs().max_element() <= 1e-4 * p.max_element().max(1.0), "pixel {i}: {sum} vs {p}");
-    }
-    let light_tracing = &out.layers[names.iter().position(|n| n == "s2_t1").unwrap()];
-    assert!(light_tracing.pixels.iter().any(|p| p.max_element() > 0.0), "light tracing contributes");
-}
-
-/// MMLT's and tempered MMLT's per-depth images: asking for them leaves the image bit for bit
-/// as it was, they sum to it, and each depth's total agrees with BDPT's strategies of that
-/// depth (`s + t − 2 = k`) summed.
-#[test]
-fn depth_images_sum_to_the_image_and_agree_with_bdpts_strategies_per_depth() {
-    let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
-    let bdpt = BdptIntegrator { strategy_images: true, ..BdptIntegrator::new(3) };
-    let reference = render_with(&scene, &bdpt, Budget::Samples(1024), 4, 0);
-    let total = |image: &Image| image.pixels.iter().map(|p| f64::from(crate::math::luminance(*p))).sum::<f64>();
-    let mut per_depth = [0.0f64; 4];
-    for (name, layer) in bdpt.layer_names().iter().zip(&reference.layers) {
-        let (s, t) = name.trim_start_matches('s').split_once("_t").unwrap();
-        let k = s.parse::<usize>().unwrap() + t.parse::<usize>().unwrap() - 2;
-        per_depth[k] += total(layer);
-    }
-    let mmlt = MmltIntegrator { bootstrap: 50_000, chains: 16, ..MmltIntegrator::new(3) };
-    let tempered = TemperedIntegrator { bootstrap: 50_000, chains: 16, ..TemperedIntegrator::new(3) };
-    let cases: [(&dyn Integrator, &dyn Integrator); 2] = [
-        (&mmlt, &MmltIntegrator { depth_images: true, ..mmlt }),
-        (&tempered, &TemperedIntegrator { depth_images: true, ..tempered.clone() }),
-    ];
-    for (plain, with_images) in cases {
-        let a = render_with(&scene, plain, Budget::Samples(1024), 5, 0);
-        let b = render_with(&scene, with_images, Budget::Samples(1024), 5, 0);
-        let name = plain.name();
-        assert!(a.layers.is_empty() && plain.layer_names().is_empty());
-        assert_eq!(a.image.pixels, b.image.pixels, "{name}: the image does not change");
-        assert_eq!(with_images.layer_names(), ["depth0", "depth1", "depth2", "depth3"]);
-        assert_eq!(b.layers.len(), 4);
-        for (i, p) in b.image.pixels.iter().enumerate() {
-            let sum: Rgb = b.layers.iter().map(|l| l.pixels[i]).sum();
-            assert!((sum - *p).abs().max_element() <= 1e-5 * p.max_element().max(1.0), "{name} pixel {i}");
-        }
-        for (k, layer) in b.layers.iter().enumerate() {
-            let (got, want) = (total(layer), per_depth[k]);
-            assert!(want > 0.0, "depth {k} carries light");
-            assert!((got / want - 1.0).abs() < 0.05, "{name} depth {k}: {got} against BDPT's {want}");
-        }
-    }
-}
-
 fn mmlt_render(scene: &Scene, mpp: u32, seed: u64, threads: usize) -> RenderOutput {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
