@@ -33,6 +33,11 @@ pub struct IntegratorFlags {
     /// paths (tempered MMLT's default).
     #[arg(long, value_enum)]
     pub allocation: Option<Allocation>,
+    /// MMLT and tempered MMLT: sample the depths whose bootstrap has fewer than N non-zero
+    /// values independently (bidirectional path tracing restricted to the depth) instead of by
+    /// chains that would all start from those few states (0: never)
+    #[arg(long, value_name = "N")]
+    pub independent_below: Option<usize>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long)]
     pub replicas: Option<usize>,
@@ -135,6 +140,7 @@ impl IntegratorFlags {
             chains: self.chains,
             large_step: self.large_step,
             allocation: self.allocation,
+            independent_below: self.independent_below,
             replicas: self.replicas,
             swap: self.swap,
             ladder: self.ladder.clone(),

@@ -62,3 +62,48 @@ fn depth_images_sum_to_the_image_and_agree_with_bdpts_strategies_per_depth() {
         }
     }
 }
+
+/// Depths sampled independently instead of by chains (`independent_below` above the
+/// bootstrap size: every depth `k ≥ 1`): each depth's total agrees with BDPT's strategies of
+/// that depth, the statistics say which depths were sampled so, and the image is the same at
+/// one and at four threads.
+#[test]
+fn independently_sampled_depths_agree_with_bdpt_per_depth() {
+    let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
+    let bdpt = BdptIntegrator { strategy_images: true, ..BdptIntegrator::new(3) };
+    let reference = render_with(&scene, &bdpt, Budget::Samples(1024), 4, 0);
+    let total = |image: &Image| image.pixels.iter().map(|p| f64::from(crate::math::luminance(*p))).sum::<f64>();
+    let mut per_depth = [0.0f64; 4];
+    for (name, layer) in bdpt.layer_names().iter().zip(&reference.layers) {
+        let (s, t) = name.trim_start_matches('s').split_once("_t").unwrap();
+        per_depth[s.parse::<usize>().unwrap() + t.parse::<usize>().unwrap() - 2] += total(layer);
+    }
+    let mmlt = MmltIntegrator {
+        bootstrap: 20_000,
+        chains: 16,
+        independent_below: 1_000_000,
+        depth_images: true,
+        ..MmltIntegrator::new(3)
+    };
+    let tempered = TemperedIntegrator {
+        bootstrap: 20_000,
+        chains: 16,
+        independent_below: 1_000_000,
+        depth_images: true,
+        ..TemperedIntegrator::new(3)
+    };
+    for integrator in [&mmlt as &dyn Integrator, &tempered] {
+        let name = integrator.name();
+        let out = render_with(&scene, integrator, Budget::Samples(512), 5, 4);
+        let one = render_with(&scene, integrator, Budget::Samples(512), 5, 1);
+        assert_eq!(out.image.pixels, one.image.pixels, "{name}: the same image at 1 and 4 threads");
+        for d in &out.chains {
+            assert_eq!(d.independent, d.depth >= 1, "{name} depth {}: sampled independently", d.depth);
+            assert!(d.bootstrap_nonzero > 0 && d.bootstrap_nonzero <= d.bootstrap_samples);
+        }
+        for (k, layer) in out.layers.iter().enumerate() {
+            let (got, want) = (total(layer), per_depth[k]);
+            assert!((got / want - 1.0).abs() < 0.05, "{name} depth {k}: {got} against BDPT's {want}");
+        }
+    }
+}

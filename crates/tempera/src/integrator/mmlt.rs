@@ -23,6 +23,9 @@ pub struct MmltIntegrator {
     /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
     /// image.
     pub depth_images: bool,
+    /// Depths `k ≥ 1` whose bootstrap has fewer non-zero values than this are sampled
+    /// independently ([`crate::mcmc::independent`]); 0 (the default, MMLT as published): none.
+    pub independent_below: usize,
 }
 
 impl MmltIntegrator {
@@ -35,6 +38,7 @@ impl MmltIntegrator {
             large_step_probability: 0.3,
             spread_allocation: false,
             depth_images: false,
+            independent_below: 0,
         }
     }
 }
@@ -56,6 +60,10 @@ impl Target for DepthTarget<'_> {
     /// deeper paths from every strategy of their depth at once.
     fn normaliser(&self, seed: u64, samples: usize) -> Option<(Moments, u64)> {
         depth_normaliser(self.scene, self.depth, seed, samples)
+    }
+
+    fn independent_depth(&self) -> Option<usize> {
+        (self.depth >= 1).then_some(self.depth)
     }
 }
 
@@ -79,7 +87,8 @@ impl Integrator for MmltIntegrator {
         let depths = self.max_depth as usize + 1;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_spread_allocation(self.spread_allocation)
-            .with_group_images(self.depth_images);
+            .with_group_images(self.depth_images)
+            .with_independent_below(self.independent_below);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.group.k;

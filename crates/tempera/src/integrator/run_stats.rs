@@ -97,6 +97,13 @@ pub struct DepthRecord {
     pub b_rel_se: f64,
     pub bootstrap_samples: u64,
     pub large_step_samples: u64,
+    /// Non-zero values among the bootstrap samples.
+    #[serde(default)]
+    pub bootstrap_nonzero: u64,
+    /// The depth was sampled independently (bidirectional path tracing restricted to it)
+    /// instead of by chains: its bootstrap had too few non-zero values to start them apart.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub independent: bool,
     /// How unevenly the depth's light is spread over its paths: `sqrt(E[f²]/E[f]²)` over the
     /// bootstrap's non-zero values, capped at 8 (mutations may be allotted by `b` times it).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -189,6 +196,8 @@ impl DepthRecord {
             b_rel_se: d.b_rel_se,
             bootstrap_samples: d.bootstrap_samples,
             large_step_samples: d.large_step_samples,
+            bootstrap_nonzero: d.bootstrap_nonzero,
+            independent: d.independent,
             spread: d.spread,
             mutations: d.mutations,
             acceptance: Acceptance {

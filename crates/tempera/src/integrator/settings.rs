@@ -156,6 +156,10 @@ pub struct IntegratorSettings {
     /// MMLT and tempered MMLT: how mutations are allotted to path depths.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub allocation: Option<Allocation>,
+    /// MMLT and tempered MMLT: depths whose bootstrap has fewer non-zero values than this are
+    /// sampled independently instead of by chains (0: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub independent_below: Option<usize>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
@@ -262,6 +266,7 @@ impl IntegratorSettings {
             ("chains", self.chains.is_some(), chain),
             ("large_step", self.large_step.is_some(), chain),
             ("allocation", self.allocation.is_some(), kind == Mmlt || tempered),
+            ("independent_below", self.independent_below.is_some(), kind == Mmlt || tempered),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
@@ -299,6 +304,7 @@ impl IntegratorSettings {
                 ("ladder", self.ladder.is_some()),
                 ("reuse_replicas", self.reuse_replicas.is_some()),
                 ("allocation", self.allocation.is_some()),
+                ("independent_below", self.independent_below.is_some()),
                 ("max_temperature", self.max_temperature.is_some()),
                 ("flattening", self.flattening.is_some()),
                 ("collapse_above", self.collapse_above.is_some()),
@@ -313,6 +319,7 @@ impl IntegratorSettings {
         check_range("maxdepth", self.maxdepth, 0..=100_000)?;
         check_range("bootstrap", self.bootstrap, 1..=100_000_000)?;
         check_range("chains", self.chains, 1..=1_000_000)?;
+        check_range("independent_below", self.independent_below, 0..=100_000_000)?;
         check_probability("large_step", self.large_step.map(f64::from))?;
         check_probability("hot_large_step", self.hot_large_step.map(f64::from))?;
         check_range("replicas", self.replicas, 1..=32)?;
@@ -396,6 +403,7 @@ pub fn create(
                 chains: s.chains.unwrap_or(m.chains),
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
+                independent_below: s.independent_below.unwrap_or(m.independent_below),
                 depth_images: s.depth_images,
                 ..m
             })
@@ -417,6 +425,7 @@ pub fn create(
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
                 replicas: s.replica_count().unwrap_or(m.replicas),
+                independent_below: s.independent_below.unwrap_or(m.independent_below),
                 swap: s.swap.unwrap_or(m.swap),
                 ladder: s.ladder.clone().unwrap_or_default(),
                 max_temperature: s.max_temperature.unwrap_or(m.max_temperature),

@@ -14,7 +14,7 @@
 use super::{Moments, target_value, valid_radiance};
 use crate::bidir::{Heuristic, Paths, camera_subpath_vertices, connect, light_subpath_vertices};
 use crate::math::rng::hash;
-use crate::math::{Vec2, luminance};
+use crate::math::{Rgb, Vec2, luminance};
 use crate::sampler::{IndependentSampler, Sampler, Stream};
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -50,6 +50,23 @@ pub fn all_strategies(scene: &Scene, k: usize, seed: u64, samples: usize) -> (Mo
 /// One estimate: the sum over the strategies of depth `k` of their MIS-weighted luminance,
 /// and the rays traced.
 fn sample(scene: &Scene, k: usize, sampler: &mut IndependentSampler, paths: &mut Paths) -> (f64, u64) {
+    let mut sum = 0.0;
+    let rays = each_strategy(scene, k, sampler, paths, |_, l| sum += f64::from(target_value(luminance(l))));
+    (sum, rays)
+}
+
+/// Samples one camera and one light subpath for depth `k ≥ 1` and hands every strategy's
+/// valid MIS-weighted contribution to `splat` with its raster position (the camera ray's,
+/// or the light path's for `t = 1`): one sample of bidirectional path tracing restricted to
+/// depth `k`, whose splats summed over `N` samples and scaled by `N_pixels / N` estimate the
+/// depth's image. Returns the rays traced.
+pub fn each_strategy(
+    scene: &Scene,
+    k: usize,
+    sampler: &mut IndependentSampler,
+    paths: &mut Paths,
+    mut splat: impl FnMut(Vec2, Rgb),
+) -> u64 {
     let mut rays = 0;
     sampler.start_stream(Stream::Camera);
     let film = sampler.next_2d();
@@ -60,7 +77,6 @@ fn sample(scene: &Scene, k: usize, sampler: &mut IndependentSampler, paths: &mut
     rays += 1;
     camera_subpath_vertices(scene, ray, sampler, k + 2, &mut paths.camera, &mut rays);
     light_subpath_vertices(scene, sampler, k + 1, &mut paths.light, &mut rays);
-    let mut sum = 0.0;
     for s in 0..=k + 1 {
         let t = k + 2 - s;
         let Some(c) = connect(scene, paths.subpaths(), (s, t), sampler, Heuristic::Power, &mut rays) else {
@@ -68,10 +84,10 @@ fn sample(scene: &Scene, k: usize, sampler: &mut IndependentSampler, paths: &mut
         };
         let l = c.l * c.weight;
         if valid_radiance(l) {
-            sum += f64::from(target_value(luminance(l)));
+            splat(c.raster.unwrap_or(raster), l);
         }
     }
-    (sum, rays)
+    rays
 }
 
 #[cfg(test)]

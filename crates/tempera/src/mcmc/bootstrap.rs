@@ -189,6 +189,11 @@ impl Bootstrap {
         (sum2 * n as f64 / (sum * sum)).sqrt().clamp(1.0, 8.0)
     }
 
+    /// How many of the values are non-zero.
+    pub fn nonzero(&self) -> u64 {
+        self.values.iter().filter(|&&v| v > 0.0).count() as u64
+    }
+
     /// The moments of the values, to be refined with the large steps'.
     pub fn moments(&self) -> Moments {
         let n = self.values.len() as u64;

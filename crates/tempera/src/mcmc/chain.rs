@@ -48,6 +48,12 @@ pub trait Target {
     fn normaliser(&self, _seed: u64, _samples: usize) -> Option<(Moments, u64)> {
         None
     }
+    /// The path depth `k ≥ 1` whose paths the target's values are, where the driver may
+    /// sample it independently instead ([`super::independent`]); `None` for targets of another
+    /// kind.
+    fn independent_depth(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// A target value as the chains use it: NaN, infinite, negative and zero values all count as

@@ -17,15 +17,15 @@
 //! `N_pixels · b_l/ρ_l / M` (`M` the group's mutations).
 
 use super::bootstrap::{Bootstrap, sampler_for};
+use super::develop::{develop, gather_reports, local_reports, sum_splats};
+use super::independent::Independent;
 use super::{Chain, DepthStats, Moments, Target};
-use crate::cluster::{Cluster, Reader, Wire};
 use crate::film::SharedSplats;
 use crate::integrator::render_loop::RenderLoop;
 use crate::integrator::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats};
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::{Pcg32, hash};
 use crate::scene::Scene;
-use crate::texture::Image;
 use rayon::prelude::*;
 
 /// What the chain driver needs to know.
@@ -44,6 +44,10 @@ pub struct ChainSettings {
     /// Also develop one image per group (MMLT and tempering: per path depth) into
     /// [`RenderOutput::layers`]; they sum to the image.
     pub group_images: bool,
+    /// A group of a depth target (MMLT's and tempering's depths `k ≥ 1`) whose bootstrap has
+    /// fewer non-zero values than this is sampled independently instead of by chains
+    /// ([`super::independent`]); 0: never.
+    pub independent_below: usize,
 }
 
 /// How a group's splat layers are normalised, decided when the group is prepared.
@@ -68,6 +72,20 @@ pub trait Layers: Send + Sync {
 pub struct OneLayer;
 
 impl Layers for OneLayer {}
+
+/// A group's layers where it has walkers of its own kind; a single one where it is sampled
+/// independently (`None`).
+impl<L: Layers> Layers for Option<L> {
+    fn count(&self) -> usize {
+        self.as_ref().map_or(1, Layers::count)
+    }
+    fn layer(&self, l: usize) -> Option<(Moments, f64)> {
+        self.as_ref().and_then(|g| g.layer(l))
+    }
+    fn ratios(&self) -> &[f64] {
+        self.as_ref().map_or(&[], Layers::ratios)
+    }
+}
 
 /// A unit of parallel work of the chain driver: one chain (MMLT, PSSMLT) or one ensemble of
 /// replicas (tempered MMLT).
@@ -175,11 +193,11 @@ where
 
 /// One walker's place in the render.
 #[derive(Clone, Copy, Debug)]
-struct Slot {
+pub(super) struct Slot {
     /// Its group.
-    group: usize,
+    pub group: usize,
     /// Its index in the group.
-    index: usize,
+    pub index: usize,
     /// The group's walker count.
     walkers: u64,
     /// The group's mutations under a fixed budget.
@@ -196,15 +214,38 @@ impl Slot {
 
 /// A prepared group: what its walkers share, its splat buffers (one per layer), and the time
 /// its preparation took.
-struct Group<L> {
-    shared: L,
-    splats: Vec<SharedSplats>,
-    seconds: f64,
+pub(super) struct Group<L> {
+    pub shared: L,
+    pub splats: Vec<SharedSplats>,
+    pub seconds: f64,
 }
+
+/// Every group's preparation (`None`: a group without walkers); a group sampled
+/// independently shares nothing (`shared` is `None`).
+type Prepared<W> = Vec<Option<Group<Option<<W as Walker>::Group>>>>;
 
 impl ChainSettings {
     pub fn new(bootstrap: usize, chains: usize, sigma: f32, large_step_probability: f32) -> Self {
-        Self { bootstrap, chains, sigma, large_step_probability, spread_allocation: false, group_images: false }
+        Self {
+            bootstrap,
+            chains,
+            sigma,
+            large_step_probability,
+            spread_allocation: false,
+            group_images: false,
+            independent_below: 0,
+        }
+    }
+
+    /// These settings with the depths whose bootstrap has fewer than `n` non-zero values
+    /// sampled independently (0: none).
+    pub fn with_independent_below(self, n: usize) -> Self {
+        Self { independent_below: n, ..self }
+    }
+
+    /// Whether group `boot` of `target` is sampled independently.
+    fn independent<T: Target>(&self, boot: &Bootstrap, target: &T) -> bool {
+        target.independent_depth().is_some() && (boot.nonzero() as usize) < self.independent_below
     }
 
     /// These settings with one image per group developed beside the image when `on` is set.
@@ -312,7 +353,11 @@ impl ChainSettings {
             Budget::Samples(mpp) => Some(u64::from(mpp) * pixels),
             Budget::Time(_) => None,
         };
-        let plan = self.plan(&boots, budget);
+        let independent: Vec<bool> = (0..groups).map(|k| self.independent(&boots[k], &targets(k))).collect();
+        let (iplan, plan): (Vec<Slot>, Vec<Slot>) =
+            self.plan(&boots, budget).into_iter().partition(|slot| independent[slot.group]);
+        let mut independents: Vec<Independent> =
+            iplan.iter().map(|slot| Independent::new(slot.group, seed, slot.index, boots[slot.group].b())).collect();
         // Walkers start from bootstrap states drawn in proportion to their value.
         let starts: Vec<Distribution1D> = boots.iter().map(Bootstrap::starts).collect();
         let mut walkers: Vec<W> = plan
@@ -326,41 +371,61 @@ impl ChainSettings {
             })
             .collect();
         let stop = || render.should_stop();
-        let (prepared, rays) = self.prepare(&plan, &mut walkers, seed, groups, w, h, &stop);
+        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, groups, w, h, &stop);
         total_rays += rays;
-        // Every rank prepares every group alike; each runs the walkers dealt to it.
+        for slot in &iplan {
+            prepared[slot.group].get_or_insert_with(|| Group {
+                shared: None,
+                splats: vec![SharedSplats::new(w, h)],
+                seconds: 0.0,
+            });
+        }
+        // Every rank prepares every group alike; each runs the walkers dealt to it (the
+        // independent ones numbered after the others).
         let cluster = render.control.cluster;
-        let run_round = |walkers: &mut [W], quota: &(dyn Fn(&Slot) -> u64 + Sync)| {
+        let slots: Vec<Slot> = plan.iter().chain(&iplan).copied().collect();
+        let run_round = |walkers: &mut [W], independents: &mut [Independent], quota: &(dyn Fn(&Slot) -> u64 + Sync)| {
             walkers.par_iter_mut().zip(&plan).enumerate().filter(|(i, _)| cluster.owns(*i)).for_each(
                 |(_, (walker, slot))| {
                     let group = prepared[slot.group].as_ref().expect("every planned group is prepared");
-                    let done = walker.run(&group.shared, quota(slot), &group.splats, &stop);
+                    let shared = group.shared.as_ref().expect("a group of walkers has their shared state");
+                    let done = walker.run(shared, quota(slot), &group.splats, &stop);
                     render.progress(done);
                 },
             );
+            independents
+                .par_iter_mut()
+                .zip(&iplan)
+                .enumerate()
+                .filter(|(i, _)| cluster.owns(plan.len() + *i))
+                .for_each(|(_, (walker, slot))| {
+                    let group = prepared[slot.group].as_ref().expect("every planned group is prepared");
+                    let done = walker.run(scene, quota(slot), &group.splats[0], &stop);
+                    render.progress(done);
+                });
         };
         // The image so far (at rank 0, from every rank's walkers), its statistics taken
         // `seconds` after the start.
-        let developed = |walkers: &[W], seconds: f64| {
-            let reports = gather_reports(cluster, walkers, &plan, &prepared);
+        let developed = |walkers: &[W], independents: &[Independent], seconds: f64| {
+            let reports = gather_reports(cluster, local_reports(cluster, walkers, independents, &plan, &prepared));
             let summed = cluster.is_distributed().then(|| sum_splats(cluster, &prepared));
-            let out = develop(&boots, &reports, &plan, &prepared, summed.as_deref(), (w, h), self.group_images);
+            let out = develop(&boots, &reports, &slots, &prepared, summed.as_deref(), (w, h), self.group_images);
             RenderOutput { stats: RenderStats { rays: out.stats.rays + total_rays, seconds, ..out.stats }, ..out }
         };
         match budget {
             // A fixed budget: one round, each walker its share of its group's mutations.
-            Some(_) => run_round(&mut walkers, &Slot::quota),
+            Some(_) => run_round(&mut walkers, &mut independents, &Slot::quota),
             // A time budget: rounds of about one mutation per pixel, shared in proportion to
             // b_k, until the deadline (rank 0's). Snapshots (if asked for) are developed
             // between rounds.
             None => {
                 let mut snapshots = render.snapshots(settings.budget);
                 while !cluster.broadcast(stop()) {
-                    run_round(&mut walkers, &|slot| {
+                    run_round(&mut walkers, &mut independents, &|slot| {
                         ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1)
                     });
                     if cluster.broadcast(snapshots.is_due(render)) {
-                        let out = developed(&walkers, 0.0);
+                        let out = developed(&walkers, &independents, 0.0);
                         snapshots.take(render, |seconds| RenderOutput {
                             stats: RenderStats { seconds, ..out.stats.clone() },
                             ..out
@@ -369,7 +434,7 @@ impl ChainSettings {
                 }
             }
         }
-        let mut out = developed(&walkers, 0.0);
+        let mut out = developed(&walkers, &independents, 0.0);
         render.finish(&mut out.stats);
         Ok(out)
     }
@@ -387,7 +452,7 @@ impl ChainSettings {
         w: u32,
         h: u32,
         stop: &(dyn Fn() -> bool + Sync),
-    ) -> (Vec<Option<Group<W::Group>>>, u64) {
+    ) -> (Prepared<W>, u64) {
         let mut slices: Vec<(usize, Option<u64>, &mut [W])> = Vec::new();
         let (mut rest, mut first) = (walkers, 0);
         while !rest.is_empty() {
@@ -406,181 +471,13 @@ impl ChainSettings {
                 (k, shared, rays, start.elapsed().as_secs_f64())
             })
             .collect();
-        let mut prepared: Vec<Option<Group<W::Group>>> = (0..groups).map(|_| None).collect();
+        let mut prepared: Prepared<W> = (0..groups).map(|_| None).collect();
         let mut rays = 0;
         for (k, shared, r, seconds) in results {
             rays += r;
             let splats = (0..shared.count()).map(|_| SharedSplats::new(w, h)).collect();
-            prepared[k] = Some(Group { shared, splats, seconds });
+            prepared[k] = Some(Group { shared: Some(shared), splats, seconds });
         }
         (prepared, rays)
     }
-}
-
-/// What developing the image needs of one walker.
-#[derive(Clone, Debug, Default)]
-struct Report {
-    stats: DepthStats,
-    /// Per layer, the moments of its target over the walker's large steps.
-    large: Vec<Moments>,
-    rays: u64,
-}
-
-impl Report {
-    fn of<W: Walker>(walker: &W, layers: usize) -> Self {
-        Report { stats: walker.stats(), large: (0..layers).map(|l| walker.large(l)).collect(), rays: walker.rays() }
-    }
-}
-
-/// Every walker's report, at rank 0 (each from the rank that runs it); the other ranks get
-/// their own walkers' reports and defaults elsewhere.
-fn gather_reports<W: Walker>(
-    cluster: &dyn Cluster,
-    walkers: &[W],
-    plan: &[Slot],
-    groups: &[Option<Group<W::Group>>],
-) -> Vec<Report> {
-    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.splats.len());
-    let mut reports: Vec<Report> = walkers
-        .iter()
-        .zip(plan)
-        .enumerate()
-        .map(
-            |(i, (walker, slot))| {
-                if cluster.owns(i) { Report::of(walker, layers(slot.group)) } else { Report::default() }
-            },
-        )
-        .collect();
-    if !cluster.is_distributed() {
-        return reports;
-    }
-    let mut w = Wire::default();
-    for (i, r) in reports.iter().enumerate().filter(|(i, _)| cluster.owns(*i)) {
-        w.u64(i as u64).u64(r.rays).u64(r.large.len() as u64);
-        for m in &r.large {
-            w.f64(m.sum).f64(m.sum2).u64(m.n);
-        }
-        r.stats.encode(&mut w);
-    }
-    for bytes in cluster.gather(w.bytes).iter().skip(1) {
-        let mut r = Reader::new(bytes);
-        while !r.is_empty() {
-            let (i, rays) = (r.u64() as usize, r.u64());
-            let large = (0..r.u64()).map(|_| Moments { sum: r.f64(), sum2: r.f64(), n: r.u64() }).collect();
-            reports[i] = Report { stats: DepthStats::decode(&mut r), large, rays };
-        }
-    }
-    reports
-}
-
-/// Every prepared group's splat buffers summed over the ranks (integer sums, exact).
-fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) -> Vec<Vec<SharedSplats>> {
-    groups
-        .iter()
-        .map(|g| {
-            let Some(g) = g else { return Vec::new() };
-            g.splats
-                .iter()
-                .map(|b| {
-                    let mut values = b.values();
-                    cluster.sum(&mut values);
-                    SharedSplats::from_values(b.width, b.height, &values)
-                })
-                .collect()
-        })
-        .collect()
-}
-
-/// The image and per-group statistics of the walkers' `reports` so far: statistics merged in
-/// walker order, each layer's normalisation `b_l` refined with the large-step proposals, each
-/// layer's splats (`summed` over the ranks, else the groups' own) scaled to estimate its share
-/// of the image per mutation. Rays count the walkers' rays only. With `group_images`, each
-/// group's share of the image (its layers summed) is also returned, in group order.
-#[allow(clippy::too_many_arguments)]
-fn develop<L: Layers>(
-    boots: &[Bootstrap],
-    reports: &[Report],
-    plan: &[Slot],
-    groups: &[Option<Group<L>>],
-    summed: Option<&[Vec<SharedSplats>]>,
-    (w, h): (u32, u32),
-    group_images: bool,
-) -> RenderOutput {
-    let pixels = u64::from(w) * u64::from(h);
-    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.splats.len());
-    let mut stats: Vec<DepthStats> =
-        (0..boots.len()).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect();
-    let mut large: Vec<Vec<Moments>> = (0..boots.len()).map(|k| vec![Moments::default(); layers(k)]).collect();
-    let mut rays = 0;
-    for (report, slot) in reports.iter().zip(plan) {
-        let k = slot.group;
-        stats[k].merge(&report.stats);
-        for (sums, m) in large[k].iter_mut().zip(&report.large) {
-            sums.merge(m);
-        }
-        rays += report.rays;
-    }
-    let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
-    let mut per_group: Vec<Image> = Vec::new();
-    let mut invalid = 0;
-    for (k, d) in stats.iter_mut().enumerate() {
-        if group_images {
-            per_group.push(Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO));
-        }
-        let boot = &boots[k];
-        // A target's mean over its bootstrap and large-step samples.
-        let refine = |mut prior: Moments, large: &Moments| {
-            prior.merge(large);
-            prior.mean_and_rel_se()
-        };
-        (d.b, d.b_rel_se) = boot.normalisation(&large[k][0]);
-        d.bootstrap_samples = boot.values.len() as u64;
-        d.spread = boot.spread();
-        d.large_step_samples = large[k][0].n;
-        d.invalid += boot.invalid;
-        let Some(group) = &groups[k] else {
-            invalid += d.invalid;
-            continue;
-        };
-        let buffers = summed.map_or(group.splats.as_slice(), |s| s[k].as_slice());
-        invalid += d.invalid + buffers.iter().map(SharedSplats::invalid).sum::<u64>();
-        d.replica_b_ratios = group.shared.ratios().iter().map(|&r| r as f32).collect();
-        d.prepare_seconds = group.seconds;
-        if d.mutations == 0 {
-            continue;
-        }
-        // Layer l estimates its share of the group's image per mutation: N_pixels · b_l/ρ_l / M_k
-        // (MMLT's N_pixels · b_k / M_k for one layer).
-        let mut layer_b = Vec::with_capacity(group.splats.len());
-        for (l, buffer) in buffers.iter().enumerate() {
-            let (b, ratio) = match (l, group.shared.layer(l)) {
-                (0, _) => (d.b, 1.0),
-                (_, Some((moments, ratio))) => (refine(moments, &large[k][l]).0, ratio),
-                (_, None) => continue,
-            };
-            layer_b.push(b);
-            let layer = buffer.image(b / ratio * pixels as f64 / d.mutations as f64);
-            for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
-                *p += *q;
-            }
-            if let Some(own) = per_group.last_mut() {
-                for (p, q) in own.pixels.iter_mut().zip(&layer.pixels) {
-                    *p += *q;
-                }
-            }
-        }
-        if layer_b.len() > 1 {
-            d.replica_b = layer_b;
-        }
-    }
-    let mutations: u64 = stats.iter().map(|d| d.mutations).sum();
-    let stats_total = RenderStats {
-        spp_completed: (mutations / pixels.max(1)) as u32,
-        pixel_samples: mutations,
-        rays,
-        invalid_samples: invalid,
-        seconds: 0.0,
-        cancelled: false,
-    };
-    RenderOutput { image, stats: stats_total, layers: per_group, chains: stats }
 }

@@ -7,9 +7,11 @@
 pub mod all_strategies;
 pub mod bootstrap;
 pub mod chain;
+mod develop;
 pub mod direct;
 pub mod driver;
 pub mod full;
+pub mod independent;
 pub mod stats;
 pub mod strategy;
 pub mod tempered;

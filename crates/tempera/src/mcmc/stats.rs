@@ -39,6 +39,12 @@ pub struct DepthStats {
     /// Tempered MMLT with all-replica reuse: each replica's normalisation `b_l` refined with
     /// its large steps (the first is `b`); empty otherwise.
     pub replica_b: Vec<f64>,
+    /// Non-zero values among the bootstrap's samples.
+    pub bootstrap_nonzero: u64,
+    /// The depth was sampled independently instead of by chains (its bootstrap had too few
+    /// non-zero values to start them apart; see [`super::independent`]): `mutations` counts
+    /// its samples, each of every strategy of the depth.
+    pub independent: bool,
 }
 
 impl DepthStats {
@@ -74,6 +80,7 @@ impl DepthStats {
         for &b in &self.replica_b {
             w.f64(b);
         }
+        w.u64(self.bootstrap_nonzero).u64(u64::from(self.independent));
     }
 
     /// Statistics [`Self::encode`] wrote.
@@ -119,6 +126,8 @@ impl DepthStats {
         }
         d.replica_b_ratios = (0..r.u64()).map(|_| r.f64() as f32).collect();
         d.replica_b = (0..r.u64()).map(|_| r.f64()).collect();
+        d.bootstrap_nonzero = r.u64();
+        d.independent = r.u64() != 0;
         d
     }
 
@@ -131,6 +140,7 @@ impl DepthStats {
         self.technique_changes += o.technique_changes;
         self.invalid += o.invalid;
         self.seconds += o.seconds;
+        self.independent |= o.independent;
         if let Some(o) = &o.swaps {
             self.swaps.get_or_insert_with(|| SwapStats::new(o.replicas)).merge(o);
         }

@@ -162,6 +162,11 @@ impl Target for TemperedTarget<'_> {
     fn normaliser(&self, seed: u64, samples: usize) -> Option<(super::Moments, u64)> {
         super::all_strategies::depth_normaliser(self.scene, self.depth, seed, samples)
     }
+
+    /// The main target's depth: the scene's own paths, unflattened.
+    fn independent_depth(&self) -> Option<usize> {
+        (self.depth >= 1 && self.tau == 0.0).then_some(self.depth)
+    }
 }
 
 #[cfg(test)]

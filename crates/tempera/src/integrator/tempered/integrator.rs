@@ -70,6 +70,10 @@ pub struct TemperedIntegrator {
     /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
     /// image.
     pub depth_images: bool,
+    /// Depths `k ≥ 1` whose bootstrap has fewer non-zero values than this are sampled
+    /// independently ([`crate::mcmc::independent`]): their chains, all started from a few
+    /// states, would not mix, with or without replicas. 0: none.
+    pub independent_below: usize,
 }
 
 impl TemperedIntegrator {
@@ -102,6 +106,7 @@ impl TemperedIntegrator {
             hot_every: 1,
             hot_large_step: None,
             depth_images: false,
+            independent_below: 0,
         }
     }
 
@@ -121,6 +126,7 @@ impl TemperedIntegrator {
             pilot: 0,
             swap_target: 0.234,
             reuse_replicas: false,
+            independent_below: 0,
             ..Self::new(max_depth)
         }
     }
@@ -215,7 +221,8 @@ impl Integrator for TemperedIntegrator {
         control.check_memory(bytes, "a splat buffer per path depth and contributing replica")?;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_spread_allocation(self.spread_allocation)
-            .with_group_images(self.depth_images);
+            .with_group_images(self.depth_images)
+            .with_independent_below(self.independent_below);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;

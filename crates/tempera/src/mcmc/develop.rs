@@ -1,0 +1,183 @@
+//! Developing the chain driver's image ([`super::driver`]): the walkers' reports gathered
+//! from every rank, each group's normalisation refined with its large steps, and each layer's
+//! splats scaled to its share of the image.
+
+use super::driver::{Group, Layers, Slot, Walker};
+use super::independent::Independent;
+use super::{Bootstrap, DepthStats, Moments};
+use crate::cluster::{Cluster, Reader, Wire};
+use crate::film::SharedSplats;
+use crate::integrator::{RenderOutput, RenderStats};
+use crate::texture::Image;
+
+/// What developing the image needs of one walker.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Report {
+    stats: DepthStats,
+    /// Per layer, the moments of its target over the walker's large steps.
+    large: Vec<Moments>,
+    rays: u64,
+}
+
+impl Report {
+    fn of<W: Walker>(walker: &W, layers: usize) -> Self {
+        Report { stats: walker.stats(), large: (0..layers).map(|l| walker.large(l)).collect(), rays: walker.rays() }
+    }
+}
+
+/// This rank's walkers' reports, the independent walkers' after the others (defaults for
+/// the walkers other ranks run).
+pub(super) fn local_reports<W: Walker>(
+    cluster: &dyn Cluster,
+    walkers: &[W],
+    independents: &[Independent],
+    plan: &[Slot],
+    groups: &[Option<Group<Option<W::Group>>>],
+) -> Vec<Report> {
+    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.splats.len());
+    let chains = walkers.iter().zip(plan).map(|(walker, slot)| Report::of(walker, layers(slot.group)));
+    let others = independents.iter().map(|walker| Report {
+        stats: walker.stats.clone(),
+        large: vec![Moments::default()],
+        rays: walker.rays(),
+    });
+    chains.chain(others).enumerate().map(|(i, r)| if cluster.owns(i) { r } else { Report::default() }).collect()
+}
+
+/// Every walker's report, at rank 0 (each from the rank that runs it); the other ranks get
+/// their own walkers' reports and defaults elsewhere.
+pub(super) fn gather_reports(cluster: &dyn Cluster, mut reports: Vec<Report>) -> Vec<Report> {
+    if !cluster.is_distributed() {
+        return reports;
+    }
+    let mut w = Wire::default();
+    for (i, r) in reports.iter().enumerate().filter(|(i, _)| cluster.owns(*i)) {
+        w.u64(i as u64).u64(r.rays).u64(r.large.len() as u64);
+        for m in &r.large {
+            w.f64(m.sum).f64(m.sum2).u64(m.n);
+        }
+        r.stats.encode(&mut w);
+    }
+    for bytes in cluster.gather(w.bytes).iter().skip(1) {
+        let mut r = Reader::new(bytes);
+        while !r.is_empty() {
+            let (i, rays) = (r.u64() as usize, r.u64());
+            let large = (0..r.u64()).map(|_| Moments { sum: r.f64(), sum2: r.f64(), n: r.u64() }).collect();
+            reports[i] = Report { stats: DepthStats::decode(&mut r), large, rays };
+        }
+    }
+    reports
+}
+
+/// Every prepared group's splat buffers summed over the ranks (integer sums, exact).
+pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) -> Vec<Vec<SharedSplats>> {
+    groups
+        .iter()
+        .map(|g| {
+            let Some(g) = g else { return Vec::new() };
+            g.splats
+                .iter()
+                .map(|b| {
+                    let mut values = b.values();
+                    cluster.sum(&mut values);
+                    SharedSplats::from_values(b.width, b.height, &values)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The image and per-group statistics of the walkers' `reports` so far: statistics merged in
+/// walker order, each layer's normalisation `b_l` refined with the large-step proposals, each
+/// layer's splats (`summed` over the ranks, else the groups' own) scaled to estimate its share
+/// of the image per mutation. Rays count the walkers' rays only. With `group_images`, each
+/// group's share of the image (its layers summed) is also returned, in group order.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn develop<L: Layers>(
+    boots: &[Bootstrap],
+    reports: &[Report],
+    plan: &[Slot],
+    groups: &[Option<Group<L>>],
+    summed: Option<&[Vec<SharedSplats>]>,
+    (w, h): (u32, u32),
+    group_images: bool,
+) -> RenderOutput {
+    let pixels = u64::from(w) * u64::from(h);
+    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.splats.len());
+    let mut stats: Vec<DepthStats> =
+        (0..boots.len()).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect();
+    let mut large: Vec<Vec<Moments>> = (0..boots.len()).map(|k| vec![Moments::default(); layers(k)]).collect();
+    let mut rays = 0;
+    for (report, slot) in reports.iter().zip(plan) {
+        let k = slot.group;
+        stats[k].merge(&report.stats);
+        for (sums, m) in large[k].iter_mut().zip(&report.large) {
+            sums.merge(m);
+        }
+        rays += report.rays;
+    }
+    let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
+    let mut per_group: Vec<Image> = Vec::new();
+    let mut invalid = 0;
+    for (k, d) in stats.iter_mut().enumerate() {
+        if group_images {
+            per_group.push(Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO));
+        }
+        let boot = &boots[k];
+        // A target's mean over its bootstrap and large-step samples.
+        let refine = |mut prior: Moments, large: &Moments| {
+            prior.merge(large);
+            prior.mean_and_rel_se()
+        };
+        (d.b, d.b_rel_se) = boot.normalisation(&large[k][0]);
+        d.bootstrap_samples = boot.values.len() as u64;
+        d.spread = boot.spread();
+        d.bootstrap_nonzero = boot.nonzero();
+        d.large_step_samples = large[k][0].n;
+        d.invalid += boot.invalid;
+        let Some(group) = &groups[k] else {
+            invalid += d.invalid;
+            continue;
+        };
+        let buffers = summed.map_or(group.splats.as_slice(), |s| s[k].as_slice());
+        invalid += d.invalid + buffers.iter().map(SharedSplats::invalid).sum::<u64>();
+        d.replica_b_ratios = group.shared.ratios().iter().map(|&r| r as f32).collect();
+        d.prepare_seconds = group.seconds;
+        if d.mutations == 0 {
+            continue;
+        }
+        // Layer l estimates its share of the group's image per mutation: N_pixels · b_l/ρ_l / M_k
+        // (MMLT's N_pixels · b_k / M_k for one layer).
+        let mut layer_b = Vec::with_capacity(group.splats.len());
+        for (l, buffer) in buffers.iter().enumerate() {
+            let (b, ratio) = match (l, group.shared.layer(l)) {
+                (0, _) => (d.b, 1.0),
+                (_, Some((moments, ratio))) => (refine(moments, &large[k][l]).0, ratio),
+                (_, None) => continue,
+            };
+            layer_b.push(b);
+            let layer = buffer.image(b / ratio * pixels as f64 / d.mutations as f64);
+            for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
+                *p += *q;
+            }
+            if let Some(own) = per_group.last_mut() {
+                for (p, q) in own.pixels.iter_mut().zip(&layer.pixels) {
+                    *p += *q;
+                }
+            }
+        }
+        if layer_b.len() > 1 {
+            d.replica_b = layer_b;
+        }
+    }
+    let mutations: u64 = stats.iter().map(|d| d.mutations).sum();
+    let stats_total = RenderStats {
+        spp_completed: (mutations / pixels.max(1)) as u32,
+        pixel_samples: mutations,
+        rays,
+        invalid_samples: invalid,
+        seconds: 0.0,
+        cancelled: false,
+    };
+    RenderOutput { image, stats: stats_total, layers: per_group, chains: stats }
+}
