@@ -34,19 +34,25 @@ pub struct ReversePdfs {
 }
 
 /// The connection endpoints of strategy `(s, t)`, with the freshly sampled one substituted.
-struct Endpoints {
-    qs: Option<Vertex>,
-    pt: Option<Vertex>,
-    qs_minus: Option<Vertex>,
-    pt_minus: Option<Vertex>,
+struct Endpoints<'a> {
+    qs: Option<&'a Vertex>,
+    pt: Option<&'a Vertex>,
+    qs_minus: Option<&'a Vertex>,
+    pt_minus: Option<&'a Vertex>,
 }
 
-fn endpoints(light: &[Vertex], camera: &[Vertex], sampled: Option<&Vertex>, s: usize, t: usize) -> Endpoints {
+fn endpoints<'a>(
+    light: &'a [Vertex],
+    camera: &'a [Vertex],
+    sampled: Option<&'a Vertex>,
+    s: usize,
+    t: usize,
+) -> Endpoints<'a> {
     Endpoints {
-        qs: (s > 0).then(|| if s == 1 { sampled.copied().unwrap_or_else(|| light[0]) } else { light[s - 1] }),
-        pt: (t > 0).then(|| if t == 1 { sampled.copied().unwrap_or_else(|| camera[0]) } else { camera[t - 1] }),
-        qs_minus: (s > 1).then(|| light[s - 2]),
-        pt_minus: (t > 1).then(|| camera[t - 2]),
+        qs: (s > 0).then(|| if s == 1 { sampled.unwrap_or_else(|| &light[0]) } else { &light[s - 1] }),
+        pt: (t > 0).then(|| if t == 1 { sampled.unwrap_or_else(|| &camera[0]) } else { &camera[t - 1] }),
+        qs_minus: (s > 1).then(|| &light[s - 2]),
+        pt_minus: (t > 1).then(|| &camera[t - 2]),
     }
 }
 
@@ -61,7 +67,7 @@ pub fn reverse_pdfs(
 ) -> ReversePdfs {
     let Endpoints { qs, pt, qs_minus, pt_minus } = endpoints(light, camera, sampled, s, t);
     let pt_rev = pt.map_or(0.0, |pt| match (&qs, &pt_minus) {
-        (Some(q), _) => q.pdf(scene, qs_minus.as_ref(), &pt),
+        (Some(q), _) => q.pdf(scene, qs_minus, pt),
         (None, Some(pm)) => pt.pdf_light_origin(scene, pm),
         (None, None) => 0.0,
     });
@@ -73,11 +79,11 @@ pub fn reverse_pdfs(
         _ => 0.0,
     };
     let qs_rev = match (&qs, &pt) {
-        (Some(q), Some(p)) => p.pdf(scene, pt_minus.as_ref(), q),
+        (Some(q), Some(p)) => p.pdf(scene, pt_minus, q),
         _ => 0.0,
     };
     let qs_minus_rev = match (&qs, &qs_minus) {
-        (Some(q), Some(qm)) => q.pdf(scene, pt.as_ref(), qm),
+        (Some(q), Some(qm)) => q.pdf(scene, pt, qm),
         _ => 0.0,
     };
     ReversePdfs { pt: pt_rev, pt_minus: pt_minus_rev, qs: qs_rev, qs_minus: qs_minus_rev }
@@ -149,7 +155,7 @@ pub fn mis_weight_with(
     };
     let light_fwd = |i: usize| if i + 1 == s { qs.map_or(0.0, |q| q.pdf_fwd) } else { light[i].pdf_fwd };
     let light_delta = |i: usize| if i + 1 == s { false } else { light[i].delta };
-    let first = if s == 1 { qs } else { light.first().copied() };
+    let first = if s == 1 { qs } else { light.first() };
     ri = 1.0;
     for i in (0..s).rev() {
         ri *= remap0(light_rev(i)) / remap0(light_fwd(i));
