@@ -43,7 +43,8 @@ fn random_walk<S: Sampler>(
     let (mut made, mut crossings) = (0, 0u32);
     while made < bounces {
         *rays += 1;
-        let prev = *path.last().expect("a subpath starts at an endpoint");
+        // The previous vertex, by index: a vertex is large, so it is not copied.
+        let prev = path.len().checked_sub(1).expect("a subpath starts at an endpoint");
         let hit = scene.intersect(&ray);
         if let Some(m) = medium {
             let t_max = hit.as_ref().map_or(f32::INFINITY, |it| it.t);
@@ -56,14 +57,14 @@ fn random_walk<S: Sampler>(
                     }
                     let p = ray.o + ray.d * t;
                     let mut v = Vertex::in_medium(p, -ray.d, m, beta);
-                    v.pdf_fwd = prev.convert_density(pdf_fwd, &v);
+                    v.pdf_fwd = path[prev].convert_density(pdf_fwd, &v);
                     path.push(v);
                     made += 1;
                     // The phase function is sampled exactly (weight one) and is symmetric.
                     let (wi, pdf) = med.sample_phase(-ray.d, sampler.next_2d());
                     pdf_fwd = pdf;
                     let n = path.len();
-                    path[n - 2].pdf_rev = path[n - 1].convert_density(pdf, &prev);
+                    path[n - 2].pdf_rev = path[n - 1].convert_density(pdf, &path[n - 2]);
                     ray = Ray::new(p, wi);
                     continue;
                 }
@@ -109,7 +110,7 @@ fn random_walk<S: Sampler>(
             medium,
             interface: scene.medium_interface(&it),
         };
-        v.pdf_fwd = prev.convert_density(pdf_fwd, &v);
+        v.pdf_fwd = path[prev].convert_density(pdf_fwd, &v);
         path.push(v);
         made += 1;
         let uc = sampler.next_1d();
@@ -128,8 +129,7 @@ fn random_walk<S: Sampler>(
             pdf_fwd = 0.0;
             pdf_rev = 0.0;
         }
-        let (cur, prev) = (path[n - 1], path[n - 2]);
-        path[n - 2].pdf_rev = cur.convert_density(pdf_rev, &prev);
+        path[n - 2].pdf_rev = path[n - 1].convert_density(pdf_rev, &path[n - 2]);
         if !beta.is_finite() || beta.max_element() <= 0.0 {
             return;
         }
