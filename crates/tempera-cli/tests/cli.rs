@@ -162,6 +162,34 @@ fn mmlt_writes_depth_images() {
     );
 }
 
+/// `--independent-below N` samples the sparse depths independently: the statistics say which
+/// (here every depth `k ≥ 1`, with the threshold above the bootstrap's size) and count each
+/// depth's non-zero bootstrap values; integrators without chains refuse it.
+#[test]
+fn mmlt_samples_sparse_depths_independently() {
+    let dir = scratch("independent");
+    let out = tempera()
+        .current_dir(&dir)
+        .args(["render", "--integrator", "mmlt", "--mpp", "2", "--maxdepth", "2", "--resolution", "16x16", "--quiet"])
+        .args(["--bootstrap", "2000", "--independent-below", "100000", "-o", "img.exr", "--stats", "s.json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    let depths = stats["depths"].as_array().unwrap();
+    assert_eq!(depths.len(), 3);
+    for d in depths {
+        let k = d["depth"].as_u64().unwrap();
+        assert_eq!(d["independent"].as_bool().unwrap_or(false), k >= 1, "depth {k}");
+        let nonzero = d["bootstrap_nonzero"].as_u64().unwrap();
+        assert!(nonzero > 0 && nonzero <= 2000, "depth {k}: {nonzero}");
+    }
+    assert_clean_error(
+        &["render", "--integrator", "bdpt", "--independent-below", "10"],
+        "independent_below is not a setting of the bdpt integrator",
+    );
+}
+
 #[test]
 fn mmlt_renders_with_a_mutation_budget() {
     let dir = scratch("mmlt");

@@ -67,7 +67,21 @@ pub fn each_strategy(
     paths: &mut Paths,
     mut splat: impl FnMut(Vec2, Rgb),
 ) -> u64 {
+    each_strategy_of(scene, &[k], sampler, paths, |_, p, l| splat(p, l))
+}
+
+/// [`each_strategy`] for several depths `k ≥ 1` at once, from one camera and one light
+/// subpath long enough for the deepest (a random walk's first vertices do not depend on how
+/// far it goes on): `splat` gets the index in `depths` of each contribution's depth.
+pub fn each_strategy_of(
+    scene: &Scene,
+    depths: &[usize],
+    sampler: &mut IndependentSampler,
+    paths: &mut Paths,
+    mut splat: impl FnMut(usize, Vec2, Rgb),
+) -> u64 {
     let mut rays = 0;
+    let deepest = depths.iter().copied().max().unwrap_or(0);
     sampler.start_stream(Stream::Camera);
     let film = sampler.next_2d();
     let lens = sampler.next_2d();
@@ -75,16 +89,18 @@ pub fn each_strategy(
     let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
     let ray = scene.camera.generate_ray(raster, lens);
     rays += 1;
-    camera_subpath_vertices(scene, ray, sampler, k + 2, &mut paths.camera, &mut rays);
-    light_subpath_vertices(scene, sampler, k + 1, &mut paths.light, &mut rays);
-    for s in 0..=k + 1 {
-        let t = k + 2 - s;
-        let Some(c) = connect(scene, paths.subpaths(), (s, t), sampler, Heuristic::Power, &mut rays) else {
-            continue;
-        };
-        let l = c.l * c.weight;
-        if valid_radiance(l) {
-            splat(c.raster.unwrap_or(raster), l);
+    camera_subpath_vertices(scene, ray, sampler, deepest + 2, &mut paths.camera, &mut rays);
+    light_subpath_vertices(scene, sampler, deepest + 1, &mut paths.light, &mut rays);
+    for (i, &k) in depths.iter().enumerate() {
+        for s in 0..=k + 1 {
+            let t = k + 2 - s;
+            let Some(c) = connect(scene, paths.subpaths(), (s, t), sampler, Heuristic::Power, &mut rays) else {
+                continue;
+            };
+            let l = c.l * c.weight;
+            if valid_radiance(l) {
+                splat(i, c.raster.unwrap_or(raster), l);
+            }
         }
     }
     rays

@@ -116,6 +116,8 @@ pub(super) fn develop<L: Layers>(
         }
         rays += report.rays;
     }
+    // The independently sampled depths share their walkers' samples.
+    let independent_samples: u64 = stats.iter().filter(|d| d.independent).map(|d| d.mutations).sum();
     let mut image = Image::filled(w as usize, h as usize, crate::math::Rgb::ZERO);
     let mut per_group: Vec<Image> = Vec::new();
     let mut invalid = 0;
@@ -156,7 +158,12 @@ pub(super) fn develop<L: Layers>(
                 (_, None) => continue,
             };
             layer_b.push(b);
-            let layer = buffer.image(b / ratio * pixels as f64 / d.mutations as f64);
+            let scale = if d.independent {
+                pixels as f64 / independent_samples as f64
+            } else {
+                b / ratio * pixels as f64 / d.mutations as f64
+            };
+            let layer = buffer.image(scale);
             for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
                 *p += *q;
             }

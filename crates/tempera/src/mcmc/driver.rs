@@ -357,7 +357,10 @@ impl ChainSettings {
         let (iplan, plan): (Vec<Slot>, Vec<Slot>) =
             self.plan(&boots, budget).into_iter().partition(|slot| independent[slot.group]);
         let mut independents: Vec<Independent> =
-            iplan.iter().map(|slot| Independent::new(slot.group, seed, slot.index, boots[slot.group].b())).collect();
+            iplan.iter().map(|slot| Independent::new(slot.group, seed, slot.index)).collect();
+        // Every independent walker's samples cover all the independently sampled depths.
+        let independent_depths: Vec<usize> =
+            (0..groups).filter(|&k| independent[k] && iplan.iter().any(|s| s.group == k)).collect();
         // Walkers start from bootstrap states drawn in proportion to their value.
         let starts: Vec<Distribution1D> = boots.iter().map(Bootstrap::starts).collect();
         let mut walkers: Vec<W> = plan
@@ -384,6 +387,10 @@ impl ChainSettings {
         // independent ones numbered after the others).
         let cluster = render.control.cluster;
         let slots: Vec<Slot> = plan.iter().chain(&iplan).copied().collect();
+        let independent_splats: Vec<&SharedSplats> = independent_depths
+            .iter()
+            .map(|&k| &prepared[k].as_ref().expect("every planned group is prepared").splats[0])
+            .collect();
         let run_round = |walkers: &mut [W], independents: &mut [Independent], quota: &(dyn Fn(&Slot) -> u64 + Sync)| {
             walkers.par_iter_mut().zip(&plan).enumerate().filter(|(i, _)| cluster.owns(*i)).for_each(
                 |(_, (walker, slot))| {
@@ -399,8 +406,7 @@ impl ChainSettings {
                 .enumerate()
                 .filter(|(i, _)| cluster.owns(plan.len() + *i))
                 .for_each(|(_, (walker, slot))| {
-                    let group = prepared[slot.group].as_ref().expect("every planned group is prepared");
-                    let done = walker.run(scene, quota(slot), &group.splats[0], &stop);
+                    let done = walker.run(scene, &independent_depths, quota(slot), &independent_splats, &stop);
                     render.progress(done);
                 });
         };

@@ -43,7 +43,8 @@ pub struct DepthStats {
     pub bootstrap_nonzero: u64,
     /// The depth was sampled independently instead of by chains (its bootstrap had too few
     /// non-zero values to start them apart; see [`super::independent`]): `mutations` counts
-    /// its samples, each of every strategy of the depth.
+    /// the samples drawn in its share of the budget, each of which covers every strategy of
+    /// every independently sampled depth.
     pub independent: bool,
 }
 

@@ -223,13 +223,22 @@ mod integrator {
         let cancel = AtomicBool::new(false);
         let control = RenderControl::new(&cancel, &|_| {});
         // With the same allotment of mutations to depths (tempered MMLT's default is by spread).
-        for spread_allocation in [false, true] {
-            let mmlt = MmltIntegrator { bootstrap: 5_000, chains: 8, spread_allocation, ..MmltIntegrator::new(5) };
+        // And with the depths whose bootstrap has fewer than 1500 non-zero values of 5000 sampled
+        // independently.
+        for (spread_allocation, independent_below) in [(false, 0), (true, 0), (true, 1500)] {
+            let mmlt = MmltIntegrator {
+                bootstrap: 5_000,
+                chains: 8,
+                spread_allocation,
+                independent_below,
+                ..MmltIntegrator::new(5)
+            };
             let tempered = TemperedIntegrator {
                 bootstrap: 5_000,
                 chains: 8,
                 replicas: 1,
                 spread_allocation,
+                independent_below,
                 ..TemperedIntegrator::new(5)
             };
             let a = mmlt.render(&scene, &settings(16, 3, 0), &control).unwrap();
