@@ -22,21 +22,31 @@ fn strategy_images_sum_to_the_bdpt_image() {
     assert!(light_tracing.pixels.iter().any(|p| p.max_element() > 0.0), "light tracing contributes");
 }
 
+/// An image's total luminance.
+fn total(image: &Image) -> f64 {
+    image.pixels.iter().map(|p| f64::from(crate::math::luminance(*p))).sum()
+}
+
+/// The total luminance of each depth `k = s + t − 2` (maxdepth 3) in a 1024-spp BDPT render of
+/// `scene`, from its per-strategy images.
+fn bdpt_totals_per_depth(scene: &Scene) -> [f64; 4] {
+    let bdpt = BdptIntegrator { strategy_images: true, ..BdptIntegrator::new(3) };
+    let reference = render_with(scene, &bdpt, Budget::Samples(1024), 4, 0);
+    let mut per_depth = [0.0f64; 4];
+    for (name, layer) in bdpt.layer_names().iter().zip(&reference.layers) {
+        let (s, t) = name.trim_start_matches('s').split_once("_t").unwrap();
+        per_depth[s.parse::<usize>().unwrap() + t.parse::<usize>().unwrap() - 2] += total(layer);
+    }
+    per_depth
+}
+
 /// MMLT's and tempered MMLT's per-depth images: asking for them leaves the image bit for bit
 /// as it was, they sum to it, and each depth's total agrees with BDPT's strategies of that
 /// depth (`s + t − 2 = k`) summed.
 #[test]
 fn depth_images_sum_to_the_image_and_agree_with_bdpts_strategies_per_depth() {
     let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
-    let bdpt = BdptIntegrator { strategy_images: true, ..BdptIntegrator::new(3) };
-    let reference = render_with(&scene, &bdpt, Budget::Samples(1024), 4, 0);
-    let total = |image: &Image| image.pixels.iter().map(|p| f64::from(crate::math::luminance(*p))).sum::<f64>();
-    let mut per_depth = [0.0f64; 4];
-    for (name, layer) in bdpt.layer_names().iter().zip(&reference.layers) {
-        let (s, t) = name.trim_start_matches('s').split_once("_t").unwrap();
-        let k = s.parse::<usize>().unwrap() + t.parse::<usize>().unwrap() - 2;
-        per_depth[k] += total(layer);
-    }
+    let per_depth = bdpt_totals_per_depth(&scene);
     let mmlt = MmltIntegrator { bootstrap: 50_000, chains: 16, ..MmltIntegrator::new(3) };
     let tempered = TemperedIntegrator { bootstrap: 50_000, chains: 16, ..TemperedIntegrator::new(3) };
     let cases: [(&dyn Integrator, &dyn Integrator); 2] = [
@@ -70,14 +80,7 @@ fn depth_images_sum_to_the_image_and_agree_with_bdpts_strategies_per_depth() {
 #[test]
 fn independently_sampled_depths_agree_with_bdpt_per_depth() {
     let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
-    let bdpt = BdptIntegrator { strategy_images: true, ..BdptIntegrator::new(3) };
-    let reference = render_with(&scene, &bdpt, Budget::Samples(1024), 4, 0);
-    let total = |image: &Image| image.pixels.iter().map(|p| f64::from(crate::math::luminance(*p))).sum::<f64>();
-    let mut per_depth = [0.0f64; 4];
-    for (name, layer) in bdpt.layer_names().iter().zip(&reference.layers) {
-        let (s, t) = name.trim_start_matches('s').split_once("_t").unwrap();
-        per_depth[s.parse::<usize>().unwrap() + t.parse::<usize>().unwrap() - 2] += total(layer);
-    }
+    let per_depth = bdpt_totals_per_depth(&scene);
     let mmlt = MmltIntegrator {
         bootstrap: 20_000,
         chains: 16,
