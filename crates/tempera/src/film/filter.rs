@@ -26,7 +26,8 @@ impl Filter {
         }
     }
 
-    fn eval_1d(&self, x: f32) -> f32 {
+    /// The separable profile: the weight at offset `x` along one axis.
+    pub fn eval_1d(&self, x: f32) -> f32 {
         match *self {
             Filter::Box { radius } => {
                 if x.abs() <= radius {

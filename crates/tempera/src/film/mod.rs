@@ -3,9 +3,11 @@
 //! linear RGB image.
 
 pub mod filter;
+pub mod footprint;
 pub mod splat;
 
 pub use filter::Filter;
+pub use footprint::Footprint;
 pub use splat::{SharedSplats, SplatBuffer};
 
 use crate::math::{Rgb, Vec2, is_valid_radiance};

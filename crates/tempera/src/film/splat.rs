@@ -12,8 +12,10 @@
 //!   10¹⁰ splats on one pixel, and a resolution of 6·10⁻⁸ per splat is far below what the f32
 //!   image keeps.
 
+use super::{FilmDesc, Footprint};
 use crate::math::{Rgb, Vec2, is_valid_radiance};
 use crate::texture::Image;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicI64, AtomicU64, Ordering};
 
 const SCALE: f64 = 18_446_744_073_709_551_616.0; // 2^64
@@ -25,6 +27,7 @@ pub struct SplatBuffer {
     sums: Vec<[i128; 3]>,
     /// Splats whose value was NaN, infinite or negative (dropped).
     pub invalid: u64,
+    footprint: Arc<Footprint>,
 }
 
 #[inline]
@@ -33,25 +36,39 @@ fn fixed(v: f32) -> i128 {
 }
 
 impl SplatBuffer {
+    /// A buffer whose splats each land on the pixel containing them (box reconstruction).
     pub fn new(width: u32, height: u32) -> Self {
-        Self { width, height, sums: vec![[0; 3]; width as usize * height as usize], invalid: 0 }
+        Self::with_footprint(Arc::new(Footprint::pixel(width, height)), width, height)
     }
 
-    /// Adds `l` to the pixel containing raster position `p` (box reconstruction).
+    /// A buffer for `film` whose splats go through the film's filter ([`Footprint`]).
+    pub fn filtered(film: &FilmDesc) -> Self {
+        Self::with_footprint(Arc::new(Footprint::new(film.width, film.height, film.filter)), film.width, film.height)
+    }
+
+    fn with_footprint(footprint: Arc<Footprint>, width: u32, height: u32) -> Self {
+        Self { width, height, sums: vec![[0; 3]; width as usize * height as usize], invalid: 0, footprint }
+    }
+
+    /// An empty buffer of the same size and footprint.
+    pub fn cleared(&self) -> Self {
+        Self::with_footprint(self.footprint.clone(), self.width, self.height)
+    }
+
+    /// Adds `l` at raster position `p`, spread over the pixels of the buffer's footprint.
     #[inline]
     pub fn add(&mut self, p: Vec2, l: Rgb) {
         if !is_valid_radiance(l) {
             self.invalid += 1;
             return;
         }
-        let (x, y) = (p.x.floor(), p.y.floor());
-        if x < 0.0 || y < 0.0 || x >= self.width as f32 || y >= self.height as f32 {
-            return;
-        }
-        let s = &mut self.sums[y as usize * self.width as usize + x as usize];
-        s[0] += fixed(l.x);
-        s[1] += fixed(l.y);
-        s[2] += fixed(l.z);
+        let sums = &mut self.sums;
+        self.footprint.each(p, |i, w| {
+            let s = &mut sums[i];
+            s[0] += fixed(l.x * w);
+            s[1] += fixed(l.y * w);
+            s[2] += fixed(l.z * w);
+        });
     }
 
     pub fn merge(&mut self, other: &SplatBuffer) {
@@ -118,6 +135,7 @@ pub struct SharedSplats {
     row: usize,
     sums: Vec<[AtomicI64; 3]>,
     invalid: AtomicU64,
+    footprint: Arc<Footprint>,
 }
 
 impl SharedSplats {
@@ -128,17 +146,44 @@ impl SharedSplats {
     /// A buffer for a film of `width × height` pixels whose sums each cover a square of
     /// `2^shift` pixels on a side: a coarse image of where a chain's splats went.
     pub fn coarse(width: u32, height: u32, shift: u32) -> Self {
+        let footprint = Arc::new(Footprint::pixel(width, height));
+        Self::with_footprint(width, height, shift, footprint)
+    }
+
+    /// A buffer for `film` whose splats go through the film's filter ([`Footprint`]).
+    pub fn filtered(film: &FilmDesc) -> Self {
+        Self::with_footprint(film.width, film.height, 0, Arc::new(Footprint::new(film.width, film.height, film.filter)))
+    }
+
+    fn with_footprint(width: u32, height: u32, shift: u32, footprint: Arc<Footprint>) -> Self {
         let cells = |n: u32| (n as usize).div_ceil(1 << shift);
         let (row, rows) = (cells(width), cells(height));
         let sums = (0..row * rows).map(|_| Default::default()).collect();
-        Self { width, height, shift, row, sums, invalid: AtomicU64::new(0) }
+        Self { width, height, shift, row, sums, invalid: AtomicU64::new(0), footprint }
     }
 
-    /// Adds `l` to the pixel containing raster position `p` (box reconstruction).
+    /// An empty buffer of the same size and footprint.
+    pub fn cleared(&self) -> Self {
+        Self::with_footprint(self.width, self.height, self.shift, self.footprint.clone())
+    }
+
+    /// Adds `l` at raster position `p`: spread over the pixels of the buffer's footprint, or
+    /// for a coarse buffer on the sum containing `p`.
     #[inline]
     pub fn add(&self, p: Vec2, l: Rgb) {
         if !is_valid_radiance(l) || l.x > SHARED_MAX || l.y > SHARED_MAX || l.z > SHARED_MAX {
             self.invalid.fetch_add(1, Ordering::Relaxed);
+            return;
+        }
+        if self.shift == 0 {
+            self.footprint.each(p, |i, w| {
+                for (sum, v) in self.sums[i].iter().zip([l.x, l.y, l.z]) {
+                    let v = (f64::from(v * w) * SHARED_SCALE).round() as i64;
+                    if v != 0 {
+                        sum.fetch_add(v, Ordering::Relaxed);
+                    }
+                }
+            });
             return;
         }
         let (x, y) = (p.x.floor(), p.y.floor());

@@ -46,20 +46,20 @@ struct ThreadBuffers {
 type Size = (u32, u32);
 
 impl ThreadBuffers {
-    fn new((sw, sh): Size, layers: usize, (fw, fh): Size) -> Self {
+    fn new(splats: &SplatBuffer, layers: usize, (fw, fh): Size) -> Self {
         let layers = (0..layers).map(|_| SplatBuffer::new(fw, fh)).collect();
-        ThreadBuffers { splats: SplatBuffer::new(sw, sh), layers, paths: Paths::default() }
+        ThreadBuffers { splats: splats.cleared(), layers, paths: Paths::default() }
     }
 
-    /// One set of buffers per worker thread: splats of `splat_size` (empty for estimators that
+    /// One set of buffers per worker thread: splats like `splats` (empty for estimators that
     /// do not splat) and `layers` film-size layers.
-    fn per_thread(threads: usize, splat_size: Size, layers: usize, film: Size) -> Vec<Mutex<ThreadBuffers>> {
-        (0..threads).map(|_| Mutex::new(Self::new(splat_size, layers, film))).collect()
+    fn per_thread(threads: usize, splats: &SplatBuffer, layers: usize, film: Size) -> Vec<Mutex<ThreadBuffers>> {
+        (0..threads).map(|_| Mutex::new(Self::new(splats, layers, film))).collect()
     }
 
     /// The threads' buffers summed (fixed point: in any order).
-    fn merged(all: Vec<Mutex<ThreadBuffers>>, splat_size: Size, layers: usize, film: Size) -> ThreadBuffers {
-        let mut total = Self::new(splat_size, layers, film);
+    fn merged(all: Vec<Mutex<ThreadBuffers>>, splats: &SplatBuffer, layers: usize, film: Size) -> ThreadBuffers {
+        let mut total = Self::new(splats, layers, film);
         for buffers in all {
             let buffers = buffers.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
             total.splats.merge(&buffers.splats);
@@ -200,8 +200,8 @@ fn exchange_tiles(
 }
 
 /// The threads' light-tracing splats so far, summed over the ranks at rank 0.
-fn merged_splats(cluster: &dyn Cluster, buffers: &[Mutex<ThreadBuffers>], (sw, sh): Size) -> SplatBuffer {
-    let mut splats = SplatBuffer::new(sw, sh);
+fn merged_splats(cluster: &dyn Cluster, buffers: &[Mutex<ThreadBuffers>], empty: &SplatBuffer) -> SplatBuffer {
+    let mut splats = empty.cleared();
     for buffers in buffers {
         splats.merge(&buffers.lock().unwrap_or_else(std::sync::PoisonError::into_inner).splats);
     }
@@ -251,11 +251,12 @@ pub fn render_tiles<E: PixelEstimator>(
     let cluster = control.cluster;
     let tiles = scene.film.tiles(TILE_SIZE);
     let mut film = Film::new(scene.film);
-    let (sw, sh) = if E::SPLATS { (scene.film.width, scene.film.height) } else { (0, 0) };
+    // Light-tracing splats go through the film's filter, as the camera samples do.
+    let empty_splats = if E::SPLATS { SplatBuffer::filtered(&scene.film) } else { SplatBuffer::new(0, 0) };
     let mut stats = RenderStats::default();
     let layer_count = estimator.layers();
     let (fw, fh) = (scene.film.width, scene.film.height);
-    let thread_buffers = ThreadBuffers::per_thread(render.threads().max(1), (sw, sh), layer_count, (fw, fh));
+    let thread_buffers = ThreadBuffers::per_thread(render.threads().max(1), &empty_splats, layer_count, (fw, fh));
     let max_spp = match settings.budget {
         Budget::Samples(n) => n,
         Budget::Time(_) => u32::MAX,
@@ -297,7 +298,7 @@ pub fn render_tiles<E: PixelEstimator>(
         }
         let finished = cluster.broadcast(finished);
         if cluster.broadcast(snapshots.is_due(&render)) {
-            let splats = merged_splats(cluster, &thread_buffers, (sw, sh));
+            let splats = merged_splats(cluster, &thread_buffers, &empty_splats);
             snapshots.take(&render, |seconds| RenderOutput {
                 image: develop(&film, &splats, E::SPLATS, stats.pixel_samples),
                 stats: RenderStats { spp_completed: done, seconds, ..stats.clone() },
@@ -314,7 +315,8 @@ pub fn render_tiles<E: PixelEstimator>(
             break;
         }
     }
-    let ThreadBuffers { splats, layers, .. } = ThreadBuffers::merged(thread_buffers, (sw, sh), layer_count, (fw, fh));
+    let ThreadBuffers { splats, layers, .. } =
+        ThreadBuffers::merged(thread_buffers, &empty_splats, layer_count, (fw, fh));
     let mut all: Vec<SplatBuffer> = std::iter::once(splats).chain(layers).collect();
     sum_at_root(cluster, &mut all);
     let layers = all.split_off(1);

@@ -374,12 +374,12 @@ impl ChainSettings {
             })
             .collect();
         let stop = || render.should_stop();
-        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, groups, w, h, &stop);
+        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, groups, &scene.film, &stop);
         total_rays += rays;
         for slot in &iplan {
             prepared[slot.group].get_or_insert_with(|| Group {
                 shared: None,
-                splats: vec![SharedSplats::new(w, h)],
+                splats: vec![SharedSplats::filtered(&scene.film)],
                 seconds: 0.0,
             });
         }
@@ -455,8 +455,7 @@ impl ChainSettings {
         walkers: &mut [W],
         seed: u64,
         groups: usize,
-        w: u32,
-        h: u32,
+        film: &crate::film::FilmDesc,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> (Prepared<W>, u64) {
         let mut slices: Vec<(usize, Option<u64>, &mut [W])> = Vec::new();
@@ -481,7 +480,7 @@ impl ChainSettings {
         let mut rays = 0;
         for (k, shared, r, seconds) in results {
             rays += r;
-            let splats = (0..shared.count()).map(|_| SharedSplats::new(w, h)).collect();
+            let splats = (0..shared.count()).map(|_| SharedSplats::filtered(film)).collect();
             prepared[k] = Some(Group { shared: Some(shared), splats, seconds });
         }
         (prepared, rays)
