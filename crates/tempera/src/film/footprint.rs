@@ -12,8 +12,9 @@
 //! Pharr et al. 2023 §5.4.3); a box of radius ½ puts every splat on the one pixel containing
 //! it with weight 1, as before filters applied to splats.
 
-use super::Filter;
+use super::{FilmDesc, Filter};
 use crate::math::Vec2;
+use std::sync::Arc;
 
 /// A filter's splat weights over one film.
 #[derive(Clone, Debug)]
@@ -40,9 +41,11 @@ impl Footprint {
             let whole = integral(&filter, -r, r);
             (0..n)
                 .map(|q| {
-                    // ∫ over the film's [0, n) of w(c − u) du, c the pixel's centre.
+                    // ∫ over the film's [0, n) of w(c − u) du, c the pixel's centre: the whole
+                    // integral unless the filter reaches past a border.
                     let c = q as f64 + 0.5;
-                    let on_film = integral(&filter, c - f64::from(n), c);
+                    let inside = c - r >= 0.0 && c + r <= f64::from(n);
+                    let on_film = if inside { whole } else { integral(&filter, c - f64::from(n), c) };
                     (1.0 / on_film.max(whole * 1e-6)) as f32
                 })
                 .collect()
@@ -57,9 +60,19 @@ impl Footprint {
         }
     }
 
+    /// The footprint of `film`'s filter on it.
+    pub fn of(film: &FilmDesc) -> Arc<Self> {
+        Arc::new(Self::new(film.width, film.height, film.filter))
+    }
+
     /// One pixel per splat with weight 1 (box reconstruction of radius ½).
     pub fn pixel(width: u32, height: u32) -> Self {
         Self::new(width, height, Filter::Box { radius: 0.5 })
+    }
+
+    /// The film's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width as u32, self.height as u32)
     }
 
     /// Calls `add(index, weight)` for every pixel of the film that a splat at raster position
@@ -229,8 +242,11 @@ mod tests {
                 film.merge(&buf);
             }
             let expected = film.develop();
-            let (mut mine, shared, mut boxed) =
-                (SplatBuffer::filtered(&desc), SharedSplats::filtered(&desc), SplatBuffer::new(12, 9));
+            let (mut mine, shared, mut boxed) = (
+                SplatBuffer::filtered(&Footprint::of(&desc)),
+                SharedSplats::filtered(&Footprint::of(&desc)),
+                SplatBuffer::new(12, 9),
+            );
             let mut rng = Pcg32::new(7, 1);
             let samples = 12 * 9 * 4096;
             for _ in 0..samples {

@@ -12,7 +12,7 @@
 //!   10¹⁰ splats on one pixel, and a resolution of 6·10⁻⁸ per splat is far below what the f32
 //!   image keeps.
 
-use super::{FilmDesc, Footprint};
+use super::Footprint;
 use crate::math::{Rgb, Vec2, is_valid_radiance};
 use crate::texture::Image;
 use std::sync::Arc;
@@ -41,9 +41,10 @@ impl SplatBuffer {
         Self::with_footprint(Arc::new(Footprint::pixel(width, height)), width, height)
     }
 
-    /// A buffer for `film` whose splats go through the film's filter ([`Footprint`]).
-    pub fn filtered(film: &FilmDesc) -> Self {
-        Self::with_footprint(Arc::new(Footprint::new(film.width, film.height, film.filter)), film.width, film.height)
+    /// A buffer whose splats go through a film's filter ([`Footprint::of`]), of that film's size.
+    pub fn filtered(footprint: &Arc<Footprint>) -> Self {
+        let (width, height) = footprint.size();
+        Self::with_footprint(footprint.clone(), width, height)
     }
 
     fn with_footprint(footprint: Arc<Footprint>, width: u32, height: u32) -> Self {
@@ -150,9 +151,10 @@ impl SharedSplats {
         Self::with_footprint(width, height, shift, footprint)
     }
 
-    /// A buffer for `film` whose splats go through the film's filter ([`Footprint`]).
-    pub fn filtered(film: &FilmDesc) -> Self {
-        Self::with_footprint(film.width, film.height, 0, Arc::new(Footprint::new(film.width, film.height, film.filter)))
+    /// A buffer whose splats go through a film's filter ([`Footprint::of`]), of that film's size.
+    pub fn filtered(footprint: &Arc<Footprint>) -> Self {
+        let (width, height) = footprint.size();
+        Self::with_footprint(width, height, 0, footprint.clone())
     }
 
     fn with_footprint(width: u32, height: u32, shift: u32, footprint: Arc<Footprint>) -> Self {

@@ -252,7 +252,11 @@ pub fn render_tiles<E: PixelEstimator>(
     let tiles = scene.film.tiles(TILE_SIZE);
     let mut film = Film::new(scene.film);
     // Light-tracing splats go through the film's filter, as the camera samples do.
-    let empty_splats = if E::SPLATS { SplatBuffer::filtered(&scene.film) } else { SplatBuffer::new(0, 0) };
+    let empty_splats = if E::SPLATS {
+        SplatBuffer::filtered(&crate::film::Footprint::of(&scene.film))
+    } else {
+        SplatBuffer::new(0, 0)
+    };
     let mut stats = RenderStats::default();
     let layer_count = estimator.layers();
     let (fw, fh) = (scene.film.width, scene.film.height);

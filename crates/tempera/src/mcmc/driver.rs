@@ -20,7 +20,7 @@ use super::bootstrap::{Bootstrap, sampler_for};
 use super::develop::{develop, gather_reports, local_reports, sum_splats};
 use super::independent::Independent;
 use super::{Chain, DepthStats, Moments, Target};
-use crate::film::SharedSplats;
+use crate::film::{Footprint, SharedSplats};
 use crate::integrator::render_loop::RenderLoop;
 use crate::integrator::{Budget, RenderControl, RenderOutput, RenderSettings, RenderStats};
 use crate::math::distribution::Distribution1D;
@@ -374,12 +374,14 @@ impl ChainSettings {
             })
             .collect();
         let stop = || render.should_stop();
-        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, groups, &scene.film, &stop);
+        // One footprint of the film's filter for every splat buffer.
+        let footprint = Footprint::of(&scene.film);
+        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, groups, &footprint, &stop);
         total_rays += rays;
         for slot in &iplan {
             prepared[slot.group].get_or_insert_with(|| Group {
                 shared: None,
-                splats: vec![SharedSplats::filtered(&scene.film)],
+                splats: vec![SharedSplats::filtered(&footprint)],
                 seconds: 0.0,
             });
         }
@@ -455,7 +457,7 @@ impl ChainSettings {
         walkers: &mut [W],
         seed: u64,
         groups: usize,
-        film: &crate::film::FilmDesc,
+        footprint: &std::sync::Arc<Footprint>,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> (Prepared<W>, u64) {
         let mut slices: Vec<(usize, Option<u64>, &mut [W])> = Vec::new();
@@ -480,7 +482,7 @@ impl ChainSettings {
         let mut rays = 0;
         for (k, shared, r, seconds) in results {
             rays += r;
-            let splats = (0..shared.count()).map(|_| SharedSplats::filtered(film)).collect();
+            let splats = (0..shared.count()).map(|_| SharedSplats::filtered(footprint)).collect();
             prepared[k] = Some(Group { shared: Some(shared), splats, seconds });
         }
         (prepared, rays)
