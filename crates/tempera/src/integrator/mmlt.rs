@@ -6,7 +6,7 @@
 
 use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
 use crate::mcmc::all_strategies::depth_normaliser;
-use crate::mcmc::{ChainSettings, Contribution, EvalContext, Moments, Single, Target, evaluate};
+use crate::mcmc::{ChainSettings, Contribution, EvalContext, NormaliserMoments, Single, Target, evaluate};
 use crate::scene::Scene;
 
 #[derive(Clone, Copy, Debug)]
@@ -58,7 +58,7 @@ impl Target for DepthTarget<'_> {
 
     /// Depth 0 (emitters seen directly) from points on the emitters connected to the camera,
     /// deeper paths from every strategy of their depth at once.
-    fn normaliser(&self, seed: u64, samples: usize) -> Option<(Moments, u64)> {
+    fn normaliser(&self, seed: u64, samples: usize) -> Option<(NormaliserMoments, u64)> {
         depth_normaliser(self.scene, self.depth, seed, samples)
     }
 

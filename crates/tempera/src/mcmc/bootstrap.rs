@@ -5,7 +5,7 @@
 //! samples again (tempering's calibration) evaluates them again.
 
 use super::driver::ChainSettings;
-use super::{EvalContext, Moments, State, Target};
+use super::{EvalContext, Moments, NormaliserMoments, State, Target};
 use crate::bidir::Paths;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::hash;
@@ -70,7 +70,7 @@ pub struct Bootstrap {
     pub invalid: u64,
     /// The target's own lower-variance estimator of `b` ([`Target::normaliser`]) in
     /// [`FOLDS`] independent folds, combined with the values' ([`Self::normalisation`]).
-    pub normaliser: Option<Vec<Moments>>,
+    pub normaliser: Option<Vec<NormaliserMoments>>,
 }
 
 impl Bootstrap {
@@ -113,21 +113,29 @@ impl Bootstrap {
     /// inversely proportional to their variances. Weights estimated from the very samples
     /// they weight bias the result low where the values are heavy-tailed: an estimate that
     /// missed its rare bright samples also reports a small variance and draws the weight to
-    /// itself (glossy paths that every strategy samples poorly). So the estimates are
-    /// cross-fitted: the bootstrap's values and the normaliser's samples fall into [`FOLDS`]
-    /// independent folds; each fold's two estimates (the large steps join every fold's value
-    /// estimate) are weighted with the variances measured on the other folds, and the folds'
-    /// combinations are averaged. Every weight is then independent of what it weights, and the
-    /// result is unbiased; the other folds hold most of the samples, so the weights are nearly
-    /// those of all of them. The relative error reported is the inverse-variance one over all
-    /// samples.
+    /// itself (glossy paths that every strategy samples poorly). So the weights are
+    /// cross-fitted: the normaliser's samples fall into [`FOLDS`] independent folds; each
+    /// fold's estimate is combined with the values' with weights measured on the other folds,
+    /// and the folds' combinations are averaged. Every weight is then independent of what it
+    /// weights, and the result is unbiased; the other folds hold most of the samples, so the
+    /// weights are nearly those of all of them.
+    ///
+    /// Where the normaliser measures the target's own variance ([`NormaliserMoments`]), the
+    /// values' weight comes from that measurement, so neither the bootstrap nor the large
+    /// steps weight themselves, and every fold combines the mean of all of them. (The
+    /// bootstrap alone, tens of thousands of one-strategy samples, can miss the bright paths
+    /// one large step in a hundred thousand finds; weighted by the bootstrap's variance, such
+    /// a step then decided the depth's normalisation.) Otherwise the bootstrap's values fall
+    /// into folds too, each weighted with the variance of the other folds' values. The
+    /// relative error reported is the inverse-variance one over all samples.
     pub fn normalisation(&self, large: &Moments) -> (f64, f64) {
         let mut plain = self.moments();
         plain.merge(large);
         let Some(folds) = &self.normaliser else { return plain.mean_and_rel_se() };
-        let mut normaliser = Moments::default();
+        let mut normaliser = NormaliserMoments::default();
+        normaliser.one_sample_sum2 = Some(0.0);
         folds.iter().for_each(|m| normaliser.merge(m));
-        let (a, rel_a) = normaliser.mean_and_rel_se();
+        let (a, rel_a) = normaliser.moments.mean_and_rel_se();
         let (b, rel_b) = plain.mean_and_rel_se();
         if a <= 0.0 {
             // The normaliser saw no light where the values did: theirs is the estimate.
@@ -144,11 +152,20 @@ impl Bootstrap {
         };
         let mut mean = 0.0;
         for (norm, values) in folds.iter().zip(&value_folds) {
-            let mut estimate = *values;
-            estimate.merge(large);
-            let (ma, mb) = (norm.mean_and_rel_se().0, estimate.mean_and_rel_se().0);
-            let wa = precision(&others(&normaliser, norm), norm.n);
-            let wb = precision(&others(&all_values, values), estimate.n);
+            let rest = NormaliserMoments {
+                moments: others(&normaliser.moments, &norm.moments),
+                one_sample_sum2: normaliser.one_sample_sum2.zip(norm.one_sample_sum2).map(|(all, f)| all - f),
+            };
+            let ma = norm.moments.mean_and_rel_se().0;
+            let wa = precision(&rest.moments, norm.moments.n);
+            let (mb, wb) = match rest.target_variance() {
+                Some(var) => (b, if var > 0.0 { plain.n as f64 / var } else { f64::INFINITY }),
+                None => {
+                    let mut estimate = *values;
+                    estimate.merge(large);
+                    (estimate.mean_and_rel_se().0, precision(&others(&all_values, values), estimate.n))
+                }
+            };
             let combined = match (wa.is_infinite(), wb.is_infinite()) {
                 (true, false) => ma,
                 (false, true) => mb,
@@ -158,7 +175,8 @@ impl Bootstrap {
             mean += combined / folds.len() as f64;
         }
         let var_a = (a * rel_a).powi(2);
-        let var_b = per_sample_variance(&all_values) / plain.n.max(1) as f64;
+        let per_sample = normaliser.target_variance().unwrap_or_else(|| per_sample_variance(&all_values));
+        let var_b = per_sample / plain.n.max(1) as f64;
         let var = if var_a + var_b > 0.0 { var_a * var_b / (var_a + var_b) } else { 0.0 };
         (mean, if mean > 0.0 { var.sqrt() / mean } else { 0.0 })
     }
@@ -260,7 +278,11 @@ mod tests {
                 sum2: all.sum2,
                 values,
                 invalid: 0,
-                normaliser: Some(norm.chunks(n_normaliser / FOLDS).map(moments).collect()),
+                normaliser: Some(
+                    norm.chunks(n_normaliser / FOLDS)
+                        .map(|c| NormaliserMoments { moments: moments(c), one_sample_sum2: None })
+                        .collect(),
+                ),
             };
             cross.push(boot.normalisation(&Moments::default()).0);
             let (a, rel_a) = moments(&norm).mean_and_rel_se();
@@ -272,5 +294,63 @@ mod tests {
         assert!((mean - 1.0).abs() < 4.0 * mean * rel, "cross-fitted: {mean} ± {}", mean * rel);
         let (mean, rel) = naive.mean_and_rel_se();
         assert!(1.0 - mean > 10.0 * mean * rel, "self-weighted: {mean} ± {}", mean * rel);
+    }
+
+    /// `n` strategies' MIS-weighted values `Y_s` of one path: most paths share the light
+    /// evenly, a rare one (probability `p`) carries a spike in one strategy. Returns the
+    /// normaliser's estimate `Σ Y_s`, its `n Σ Y_s²`, and the one-strategy value `n·Y_S` of a
+    /// strategy `S` picked uniformly (the target's own sample).
+    fn path(rng: &mut Pcg32, n: usize, p: f64, spike: f64) -> (f64, f64, f64) {
+        let spiky = (rng.next_f64() < p).then(|| (rng.next_f64() * n as f64) as usize);
+        let y: Vec<f64> =
+            (0..n).map(|s| if spiky == Some(s) { spike } else { (0.8 + 0.4 * rng.next_f64()) / n as f64 }).collect();
+        let pick = ((rng.next_f64() * n as f64) as usize).min(n - 1);
+        (y.iter().sum(), n as f64 * y.iter().map(|v| v * v).sum::<f64>(), n as f64 * y[pick])
+    }
+
+    /// Heavy-tailed one-strategy values (a spike that every thousandth path carries in one of
+    /// four strategies): with the target's variance measured on the normaliser's samples the
+    /// normalisation stays unbiased over 4000 independent bootstraps and has less than 0.8 of
+    /// the mean squared error (0.67 here) of the weights from the bootstrap's own variance,
+    /// which a spike among the large steps escapes.
+    #[test]
+    fn the_normalisers_measure_of_the_targets_variance_lowers_the_error() {
+        let mut rng = Pcg32::new(23, 5);
+        let (n, p, spike) = (4, 0.001, 200.0);
+        let truth = 1.0 + p * (spike - 1.0 / n as f64);
+        let (runs, n_values, n_large, n_normaliser) = (4000, 400, 1600, 96);
+        let (mut measured, mut own) = (Moments::default(), Moments::default());
+        let (mut se_measured, mut se_own) = (0.0, 0.0);
+        for _ in 0..runs {
+            let values: Vec<f32> = (0..n_values).map(|_| path(&mut rng, n, p, spike).2 as f32).collect();
+            let large = moments(&(0..n_large).map(|_| path(&mut rng, n, p, spike).2).collect::<Vec<_>>());
+            let norm: Vec<(f64, f64, f64)> = (0..n_normaliser).map(|_| path(&mut rng, n, p, spike)).collect();
+            let folds = |with_variance: bool| {
+                norm.chunks(n_normaliser / FOLDS)
+                    .map(|c| NormaliserMoments {
+                        moments: moments(&c.iter().map(|v| v.0).collect::<Vec<_>>()),
+                        one_sample_sum2: with_variance.then(|| c.iter().map(|v| v.1).sum()),
+                    })
+                    .collect()
+            };
+            let all = moments(&values.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
+            let mut boot = Bootstrap {
+                mean: all.sum / all.n as f64,
+                sum2: all.sum2,
+                values,
+                invalid: 0,
+                normaliser: Some(folds(true)),
+            };
+            let b = boot.normalisation(&large).0;
+            measured.push(b);
+            se_measured += (b - truth).powi(2);
+            boot.normaliser = Some(folds(false));
+            let b = boot.normalisation(&large).0;
+            own.push(b);
+            se_own += (b - truth).powi(2);
+        }
+        let (mean, rel) = measured.mean_and_rel_se();
+        assert!((mean - truth).abs() < 4.0 * mean * rel, "measured variance: {mean} ± {} vs {truth}", mean * rel);
+        assert!(se_measured < 0.8 * se_own, "squared errors: {se_measured} (measured) vs {se_own} (own)");
     }
 }

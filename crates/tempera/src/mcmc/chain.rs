@@ -4,7 +4,7 @@
 //! that are NaN, infinite or negative count as zero. The chain keeps its state between calls, so
 //! time-budgeted renders can advance all chains in rounds.
 
-use super::{DepthStats, Moments};
+use super::{DepthStats, Moments, NormaliserMoments};
 use crate::bidir::Paths;
 use crate::film::SharedSplats;
 use crate::math::rng::Pcg32;
@@ -45,7 +45,7 @@ pub trait Target {
     /// An estimator of the target's mean (the normalisation `b`) with a lower variance than
     /// the target's own uniform samples, where the target has one: the moments of `samples`
     /// estimates seeded by `seed`, and the rays traced.
-    fn normaliser(&self, _seed: u64, _samples: usize) -> Option<(Moments, u64)> {
+    fn normaliser(&self, _seed: u64, _samples: usize) -> Option<(NormaliserMoments, u64)> {
         None
     }
     /// The path depth `k ≥ 1` whose paths the target's values are, where the driver may

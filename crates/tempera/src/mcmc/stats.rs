@@ -168,6 +168,36 @@ impl DepthStats {
     }
 }
 
+/// A target's normaliser samples ([`super::Target::normaliser`]): the moments of its
+/// estimates and, where the target's own value is one of an estimate's terms picked at random
+/// (MMLT's depth `k ≥ 1`: one strategy of the `n` whose MIS-weighted sum the estimate is,
+/// scaled by `n`), the sum over the samples of that value's second moment given the sample,
+/// `n · Σ_s Y_s²`. By the law of total variance the target's own per-sample variance is then
+/// `E[n Σ_s Y_s²] − b²`, measured on the normaliser's samples, which see every strategy of
+/// each path and so the rare bright paths one strategy finds far more often than the
+/// target's own samples do.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NormaliserMoments {
+    pub moments: Moments,
+    pub one_sample_sum2: Option<f64>,
+}
+
+impl NormaliserMoments {
+    pub fn merge(&mut self, o: &NormaliserMoments) {
+        self.moments.merge(&o.moments);
+        self.one_sample_sum2 = self.one_sample_sum2.zip(o.one_sample_sum2).map(|(a, b)| a + b);
+    }
+
+    /// The target's own per-sample variance as the normaliser's samples measure it (`None`:
+    /// not measurable, or no light seen).
+    pub fn target_variance(&self) -> Option<f64> {
+        let n = self.moments.n as f64;
+        let mean = self.moments.sum / n;
+        let v = self.one_sample_sum2? / n - mean * mean;
+        (self.moments.n > 1 && mean > 0.0 && v.is_finite()).then_some(v.max(0.0) * n / (n - 1.0))
+    }
+}
+
 /// Running sums of a target's values over independent uniform samples (the bootstrap, large
 /// steps): its mean is a normalisation `b`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -159,7 +159,7 @@ impl Target for TemperedTarget<'_> {
     }
 
     /// As MMLT normalises the depth: replica 0's target is MMLT's.
-    fn normaliser(&self, seed: u64, samples: usize) -> Option<(super::Moments, u64)> {
+    fn normaliser(&self, seed: u64, samples: usize) -> Option<(super::NormaliserMoments, u64)> {
         super::all_strategies::depth_normaliser(self.scene, self.depth, seed, samples)
     }
 
