@@ -132,8 +132,7 @@ impl Bootstrap {
         let mut plain = self.moments();
         plain.merge(large);
         let Some(folds) = &self.normaliser else { return plain.mean_and_rel_se() };
-        let mut normaliser = NormaliserMoments::default();
-        normaliser.one_sample_sum2 = Some(0.0);
+        let mut normaliser = NormaliserMoments { one_sample_sum2: Some(0.0), ..Default::default() };
         folds.iter().for_each(|m| normaliser.merge(m));
         let (a, rel_a) = normaliser.moments.mean_and_rel_se();
         let (b, rel_b) = plain.mean_and_rel_se();
