@@ -38,6 +38,11 @@ pub struct IntegratorFlags {
     /// chains that would all start from those few states (0: never)
     #[arg(long, value_name = "N")]
     pub independent_below: Option<usize>,
+    /// MMLT and tempered MMLT: the share of the chains' rays spent on further samples of the
+    /// depths' normalisers (every strategy of a path at once) as the render goes on, split
+    /// evenly over the depths (default 0.1; 0: the bootstrap's samples alone)
+    #[arg(long, value_name = "SHARE")]
+    pub normaliser_share: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long)]
     pub replicas: Option<usize>,
@@ -141,6 +146,7 @@ impl IntegratorFlags {
             large_step: self.large_step,
             allocation: self.allocation,
             independent_below: self.independent_below,
+            normaliser_share: self.normaliser_share,
             replicas: self.replicas,
             swap: self.swap,
             ladder: self.ladder.clone(),

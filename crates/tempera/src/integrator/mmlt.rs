@@ -26,6 +26,9 @@ pub struct MmltIntegrator {
     /// Depths `k ≥ 1` whose bootstrap has fewer non-zero values than this are sampled
     /// independently ([`crate::mcmc::independent`]); 0 (the default, MMLT as published): none.
     pub independent_below: usize,
+    /// The share of the chains' rays spent on further samples of the depths' normalisers as
+    /// the render goes on ([`crate::mcmc::normaliser`]; 0: the bootstrap's alone).
+    pub normaliser_share: f64,
 }
 
 impl MmltIntegrator {
@@ -39,6 +42,7 @@ impl MmltIntegrator {
             spread_allocation: false,
             depth_images: false,
             independent_below: 0,
+            normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
         }
     }
 }
@@ -88,7 +92,8 @@ impl Integrator for MmltIntegrator {
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_spread_allocation(self.spread_allocation)
             .with_group_images(self.depth_images)
-            .with_independent_below(self.independent_below);
+            .with_independent_below(self.independent_below)
+            .with_normaliser_share(self.normaliser_share);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.group.k;

@@ -160,6 +160,10 @@ pub struct IntegratorSettings {
     /// sampled independently instead of by chains (0: none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub independent_below: Option<usize>,
+    /// MMLT and tempered MMLT: the share of the chains' rays spent on further samples of the
+    /// depths' normalisers as the render goes on (0: the bootstrap's alone).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub normaliser_share: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
@@ -267,6 +271,7 @@ impl IntegratorSettings {
             ("large_step", self.large_step.is_some(), chain),
             ("allocation", self.allocation.is_some(), kind == Mmlt || tempered),
             ("independent_below", self.independent_below.is_some(), kind == Mmlt || tempered),
+            ("normaliser_share", self.normaliser_share.is_some(), kind == Mmlt || tempered),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
@@ -305,6 +310,7 @@ impl IntegratorSettings {
                 ("reuse_replicas", self.reuse_replicas.is_some()),
                 ("allocation", self.allocation.is_some()),
                 ("independent_below", self.independent_below.is_some()),
+                ("normaliser_share", self.normaliser_share.is_some()),
                 ("max_temperature", self.max_temperature.is_some()),
                 ("flattening", self.flattening.is_some()),
                 ("collapse_above", self.collapse_above.is_some()),
@@ -330,6 +336,7 @@ impl IntegratorSettings {
         check_probability("swap_target", self.swap_target)?;
         check_probability("collapse_above", self.collapse_above)?;
         check_probability("collapse_below", self.collapse_below)?;
+        check_range("normaliser_share", self.normaliser_share, 0.0..=1.0)?;
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
         if self.flattening == Some(Flattening::Power) && self.max_temperature.is_some_and(|t| t > 1.0) {
             return Err(
@@ -404,6 +411,7 @@ pub fn create(
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
                 independent_below: s.independent_below.unwrap_or(m.independent_below),
+                normaliser_share: s.normaliser_share.unwrap_or(m.normaliser_share),
                 depth_images: s.depth_images,
                 ..m
             })
@@ -426,6 +434,7 @@ pub fn create(
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
                 replicas: s.replica_count().unwrap_or(m.replicas),
                 independent_below: s.independent_below.unwrap_or(m.independent_below),
+                normaliser_share: s.normaliser_share.unwrap_or(m.normaliser_share),
                 swap: s.swap.unwrap_or(m.swap),
                 ladder: s.ladder.clone().unwrap_or_default(),
                 max_temperature: s.max_temperature.unwrap_or(m.max_temperature),

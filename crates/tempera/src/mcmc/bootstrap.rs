@@ -71,6 +71,9 @@ pub struct Bootstrap {
     /// The target's own lower-variance estimator of `b` ([`Target::normaliser`]) in
     /// [`FOLDS`] independent folds, combined with the values' ([`Self::normalisation`]).
     pub normaliser: Option<Vec<NormaliserMoments>>,
+    /// The rays the values and the normaliser's samples traced.
+    pub rays: u64,
+    pub normaliser_rays: u64,
 }
 
 impl Bootstrap {
@@ -89,17 +92,18 @@ impl Bootstrap {
         let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
         let sum2 = values.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>();
         let invalid = results.iter().filter(|r| r.1).count() as u64;
-        let mut rays = results.iter().map(|r| r.2).sum();
+        let rays = results.iter().map(|r| r.2).sum();
         let per_fold = normaliser_samples(settings.bootstrap).div_ceil(FOLDS);
+        let mut normaliser_rays = 0;
         let normaliser = (0..FOLDS)
             .map(|f| {
                 target.normaliser(hash(&[seed, 0x4a1f, f as u64]), per_fold).map(|(m, r)| {
-                    rays += r;
+                    normaliser_rays += r;
                     m
                 })
             })
             .collect();
-        (Bootstrap { values, mean, sum2, invalid, normaliser }, rays)
+        (Bootstrap { values, mean, sum2, invalid, normaliser, rays, normaliser_rays }, rays + normaliser_rays)
     }
 
     /// The group's normalisation as far as the bootstrap knows it.
@@ -277,6 +281,8 @@ mod tests {
                 sum2: all.sum2,
                 values,
                 invalid: 0,
+                rays: 0,
+                normaliser_rays: 0,
                 normaliser: Some(
                     norm.chunks(n_normaliser / FOLDS)
                         .map(|c| NormaliserMoments { moments: moments(c), one_sample_sum2: None })
@@ -338,6 +344,8 @@ mod tests {
                 sum2: all.sum2,
                 values,
                 invalid: 0,
+                rays: 0,
+                normaliser_rays: 0,
                 normaliser: Some(folds(true)),
             };
             let b = boot.normalisation(&large).0;

@@ -19,6 +19,7 @@
 use super::bootstrap::{Bootstrap, sampler_for};
 use super::develop::{develop, gather_reports, local_reports, sum_splats};
 use super::independent::Independent;
+use super::normaliser::Topup;
 use super::{Chain, DepthStats, Moments, Target};
 use crate::film::{Footprint, SharedSplats};
 use crate::integrator::render_loop::RenderLoop;
@@ -48,6 +49,9 @@ pub struct ChainSettings {
     /// fewer non-zero values than this is sampled independently instead of by chains
     /// ([`super::independent`]); 0: never.
     pub independent_below: usize,
+    /// The share of the chains' rays spent on further samples of the groups' own normalisers
+    /// as the render goes on ([`super::normaliser`]; 0: the bootstrap's alone).
+    pub normaliser_share: f64,
 }
 
 /// How a group's splat layers are normalised, decided when the group is prepared.
@@ -234,6 +238,7 @@ impl ChainSettings {
             spread_allocation: false,
             group_images: false,
             independent_below: 0,
+            normaliser_share: super::normaliser::DEFAULT_SHARE,
         }
     }
 
@@ -246,6 +251,11 @@ impl ChainSettings {
     /// Whether group `boot` of `target` is sampled independently.
     fn independent<T: Target>(&self, boot: &Bootstrap, target: &T) -> bool {
         target.independent_depth().is_some() && (boot.nonzero() as usize) < self.independent_below
+    }
+
+    /// These settings with `share` of the chains' rays spent on further normaliser samples.
+    pub fn with_normaliser_share(self, share: f64) -> Self {
+        Self { normaliser_share: share, ..self }
     }
 
     /// These settings with one image per group developed beside the image when `on` is set.
@@ -346,9 +356,11 @@ impl ChainSettings {
         let seed = settings.seed;
         let (w, h) = (scene.film.width, scene.film.height);
         let pixels = u64::from(w) * u64::from(h);
-        let (boots, mut total_rays) = self.bootstrap(seed, groups, targets)?;
+        let (mut boots, mut total_rays) = self.bootstrap(seed, groups, targets)?;
         let total: f64 = boots.iter().map(|b| self.weight(b)).sum();
-        let share = |k: usize| self.weight(&boots[k]) / total;
+        let shares: Vec<f64> = boots.iter().map(|b| self.weight(b) / total).collect();
+        let share = |k: usize| shares[k];
+        let mut topup = Topup::new(&boots, &shares, self.normaliser_share);
         let budget = match settings.budget {
             Budget::Samples(mpp) => Some(u64::from(mpp) * pixels),
             Budget::Time(_) => None,
@@ -414,26 +426,41 @@ impl ChainSettings {
         };
         // The image so far (at rank 0, from every rank's walkers), its statistics taken
         // `seconds` after the start.
-        let developed = |walkers: &[W], independents: &[Independent], seconds: f64| {
+        // `extra` counts the normalisers' rays since the bootstrap.
+        let developed = |boots: &[Bootstrap], extra: u64, walkers: &[W], independents: &[Independent], seconds: f64| {
             let reports = gather_reports(cluster, local_reports(cluster, walkers, independents, &plan, &prepared));
             let summed = cluster.is_distributed().then(|| sum_splats(cluster, &prepared));
-            let out = develop(&boots, &reports, &slots, &prepared, summed.as_deref(), (w, h), self.group_images);
-            RenderOutput { stats: RenderStats { rays: out.stats.rays + total_rays, seconds, ..out.stats }, ..out }
+            let out = develop(boots, &reports, &slots, &prepared, summed.as_deref(), (w, h), self.group_images);
+            RenderOutput {
+                stats: RenderStats { rays: out.stats.rays + total_rays + extra, seconds, ..out.stats },
+                ..out
+            }
         };
         match budget {
             // A fixed budget: one round, each walker its share of its group's mutations.
-            Some(_) => run_round(&mut walkers, &mut independents, &Slot::quota),
+            Some(m) => {
+                run_round(&mut walkers, &mut independents, &Slot::quota);
+                topup.run(&mut boots, targets, seed, m, &stop);
+            }
             // A time budget: rounds of about one mutation per pixel, shared in proportion to
             // b_k, until the deadline (rank 0's). Snapshots (if asked for) are developed
             // between rounds.
             None => {
                 let mut snapshots = render.snapshots(settings.budget);
+                let round_quota =
+                    |slot: &Slot| ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1);
+                // The main-chain mutations a whole round makes, on every rank together.
+                let per_round: u64 = plan.iter().map(round_quota).sum();
+                let mut rounds = 0u64;
                 while !cluster.broadcast(stop()) {
-                    run_round(&mut walkers, &mut independents, &|slot| {
-                        ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1)
-                    });
+                    run_round(&mut walkers, &mut independents, &round_quota);
+                    // The normalisers keep pace with the rounds finished on every rank.
+                    if !cluster.broadcast(stop()) {
+                        rounds += 1;
+                        topup.run(&mut boots, targets, seed, rounds * per_round, &|| false);
+                    }
                     if cluster.broadcast(snapshots.is_due(render)) {
-                        let out = developed(&walkers, &independents, 0.0);
+                        let out = developed(&boots, topup.rays, &walkers, &independents, 0.0);
                         snapshots.take(render, |seconds| RenderOutput {
                             stats: RenderStats { seconds, ..out.stats.clone() },
                             ..out
@@ -442,7 +469,7 @@ impl ChainSettings {
                 }
             }
         }
-        let mut out = developed(&walkers, &independents, 0.0);
+        let mut out = developed(&boots, topup.rays, &walkers, &independents, 0.0);
         render.finish(&mut out.stats);
         Ok(out)
     }

@@ -12,6 +12,7 @@ pub mod direct;
 pub mod driver;
 pub mod full;
 pub mod independent;
+pub mod normaliser;
 pub mod stats;
 pub mod strategy;
 pub mod tempered;

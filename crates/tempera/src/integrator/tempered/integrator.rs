@@ -74,6 +74,9 @@ pub struct TemperedIntegrator {
     /// independently ([`crate::mcmc::independent`]): their chains, all started from a few
     /// states, would not mix, with or without replicas. 0: none.
     pub independent_below: usize,
+    /// The share of the chains' rays spent on further samples of the depths' normalisers as
+    /// the render goes on ([`crate::mcmc::normaliser`]; 0: the bootstrap's alone).
+    pub normaliser_share: f64,
 }
 
 impl TemperedIntegrator {
@@ -107,6 +110,7 @@ impl TemperedIntegrator {
             hot_large_step: None,
             depth_images: false,
             independent_below: 0,
+            normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
         }
     }
 
@@ -127,6 +131,7 @@ impl TemperedIntegrator {
             swap_target: 0.234,
             reuse_replicas: false,
             independent_below: 0,
+            normaliser_share: 0.0,
             ..Self::new(max_depth)
         }
     }
@@ -222,7 +227,8 @@ impl Integrator for TemperedIntegrator {
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_spread_allocation(self.spread_allocation)
             .with_group_images(self.depth_images)
-            .with_independent_below(self.independent_below);
+            .with_independent_below(self.independent_below)
+            .with_normaliser_share(self.normaliser_share);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
