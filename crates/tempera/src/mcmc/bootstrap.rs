@@ -257,6 +257,13 @@ mod tests {
         (0..n).map(|_| base * (0.8 + 0.4 * rng.next_f64()) + if rng.next_f64() < p { spike } else { 0.0 }).collect()
     }
 
+    /// A bootstrap of `values` beside the normaliser folds `normaliser`.
+    fn bootstrap(values: Vec<f32>, normaliser: Vec<NormaliserMoments>) -> Bootstrap {
+        let all = moments(&values.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
+        let (mean, sum2) = (all.sum / all.n as f64, all.sum2);
+        Bootstrap { mean, sum2, values, invalid: 0, rays: 0, normaliser_rays: 0, normaliser: Some(normaliser) }
+    }
+
     fn moments(values: &[f64]) -> Moments {
         let mut m = Moments::default();
         values.iter().for_each(|&v| m.push(v));
@@ -276,19 +283,10 @@ mod tests {
             let values: Vec<f32> = draw(&mut rng, n_values, 0.5, 50.0, 0.01).iter().map(|&v| v as f32).collect();
             let norm = draw(&mut rng, n_normaliser, 0.8, 20.0, 0.01);
             let all = moments(&values.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
-            let boot = Bootstrap {
-                mean: all.sum / all.n as f64,
-                sum2: all.sum2,
-                values,
-                invalid: 0,
-                rays: 0,
-                normaliser_rays: 0,
-                normaliser: Some(
-                    norm.chunks(n_normaliser / FOLDS)
-                        .map(|c| NormaliserMoments { moments: moments(c), one_sample_sum2: None })
-                        .collect(),
-                ),
-            };
+            let folds = norm
+                .chunks(n_normaliser / FOLDS)
+                .map(|c| NormaliserMoments { moments: moments(c), one_sample_sum2: None });
+            let boot = bootstrap(values, folds.collect());
             cross.push(boot.normalisation(&Moments::default()).0);
             let (a, rel_a) = moments(&norm).mean_and_rel_se();
             let (b, rel_b) = all.mean_and_rel_se();
@@ -338,16 +336,7 @@ mod tests {
                     })
                     .collect()
             };
-            let all = moments(&values.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
-            let mut boot = Bootstrap {
-                mean: all.sum / all.n as f64,
-                sum2: all.sum2,
-                values,
-                invalid: 0,
-                rays: 0,
-                normaliser_rays: 0,
-                normaliser: Some(folds(true)),
-            };
+            let mut boot = bootstrap(values, folds(true));
             let b = boot.normalisation(&large).0;
             measured.push(b);
             se_measured += (b - truth).powi(2);
