@@ -146,7 +146,6 @@ impl Bootstrap {
         } else if b <= 0.0 {
             return (a, rel_a);
         }
-        let value_folds: Vec<Moments> = (0..folds.len()).map(|f| self.fold_moments(f, folds.len())).collect();
         let all_values = self.moments();
         let others = |all: &Moments, fold: &Moments| Moments {
             sum: all.sum - fold.sum,
@@ -154,7 +153,7 @@ impl Bootstrap {
             n: all.n - fold.n,
         };
         let mut mean = 0.0;
-        for (norm, values) in folds.iter().zip(&value_folds) {
+        for (f, norm) in folds.iter().enumerate() {
             let rest = NormaliserMoments {
                 moments: others(&normaliser.moments, &norm.moments),
                 one_sample_sum2: normaliser.one_sample_sum2.zip(norm.one_sample_sum2).map(|(all, f)| all - f),
@@ -164,9 +163,10 @@ impl Bootstrap {
             let (mb, wb) = match rest.target_variance() {
                 Some(var) => (b, if var > 0.0 { plain.n as f64 / var } else { f64::INFINITY }),
                 None => {
-                    let mut estimate = *values;
+                    let values = self.fold_moments(f, folds.len());
+                    let mut estimate = values;
                     estimate.merge(large);
-                    (estimate.mean_and_rel_se().0, precision(&others(&all_values, values), estimate.n))
+                    (estimate.mean_and_rel_se().0, precision(&others(&all_values, &values), estimate.n))
                 }
             };
             let combined = match (wa.is_infinite(), wb.is_infinite()) {
