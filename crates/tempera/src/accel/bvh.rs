@@ -1,14 +1,14 @@
-//! An 8-wide compressed BVH (Ylitie et al. 2017, "Efficient Incoherent Ray Traversal on GPUs
-//! Through Compressed Wide BVHs") built by PLOC with reinsertion, from the `obvhs` crate. The
-//! geometry's primitive table is reordered to the BVH's leaf order so that leaves index it
-//! directly.
+//! The default accelerator: a binary tree built by PLOC with reinsertion and SAH leaf
+//! collapsing (the `obvhs` crate), collapsed into the four-wide tree of [`super::wide`] that
+//! rays traverse. The geometry's primitive table is reordered to the tree's leaf order so that
+//! leaves index it directly.
 
 use super::Accel;
+use super::wide::Wide;
 use crate::geometry::{Geometry, PrimHit, Ray, RayShear};
 use crate::math::Vec3;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::Ray as BvhRay;
+use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
 use std::time::Duration;
 
@@ -20,19 +20,31 @@ impl obvhs::Boundable for Bounds {
     }
 }
 
-/// Stack for the tree's build: its conversion to the wide tree recurses once per level, and
-/// primitives with identical bounds (coincident copies, shapes scaled to a point) make a
-/// chain as deep as their count.
+/// Stack for the binary tree's build, which runs on a thread of its own: primitives with
+/// identical bounds (coincident copies, shapes scaled to a point) make a chain as deep as their
+/// count, and a pass of the builder that recursed over the tree would go that deep. (The
+/// collapse into the wide tree is iterative.)
 fn build_stack_bytes(primitives: usize) -> usize {
     (32 << 20) + primitives.saturating_mul(2 << 10)
 }
 
-/// Builds the wide tree on a thread whose stack fits the deepest tree `bounds` can make (the
+/// The most primitives a leaf holds.
+const LEAF_PRIMS: u32 = 8;
+/// The cost of a node visit relative to a primitive test in the surface-area heuristic that
+/// decides which subtrees become leaves (obvhs's default is 3). Lower makes smaller leaves:
+/// Tempera's watertight triangle test is dearer than the box test of four children.
+const TRAVERSAL_COST: f32 = 2.0;
+
+/// Builds the binary tree on a thread whose stack fits the deepest tree `bounds` can make (the
 /// stack is address space, taken only as deep as the recursion goes), or here when no such
 /// thread can be made.
-fn build_tree(bounds: &[Bounds]) -> CwBvh {
-    let build =
-        || obvhs::cwbvh::builder::build_cwbvh(bounds, obvhs::BvhBuildParams::medium_build(), &mut Duration::default());
+fn build_tree(bounds: &[Bounds]) -> Bvh2 {
+    let params = obvhs::BvhBuildParams {
+        max_prims_per_leaf: LEAF_PRIMS,
+        collapse_traversal_cost: TRAVERSAL_COST,
+        ..obvhs::BvhBuildParams::medium_build()
+    };
+    let build = || obvhs::bvh2::builder::build_bvh2(bounds, params, &mut Duration::default());
     std::thread::scope(|scope| {
         let thread = std::thread::Builder::new().name("bvh-build".into()).stack_size(build_stack_bytes(bounds.len()));
         match thread.spawn_scoped(scope, build) {
@@ -45,14 +57,14 @@ fn build_tree(bounds: &[Bounds]) -> CwBvh {
 /// The default accelerator.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    tree: Option<CwBvh>,
+    tree: Wide,
 }
 
 impl Bvh {
     /// Builds over `geometry` and reorders its primitive table to the tree's leaf order.
     pub fn build(geometry: &mut Geometry) -> Self {
         if geometry.prims.is_empty() {
-            return Self { tree: None };
+            return Self::default();
         }
         let bounds: Vec<Bounds> = (0..geometry.prims.len())
             .into_par_iter()
@@ -63,48 +75,23 @@ impl Bvh {
                 Bounds(Aabb::new((lo - Vec3::splat(pad)).into(), (hi + Vec3::splat(pad)).into()))
             })
             .collect();
-        let mut tree = build_tree(&bounds);
-        geometry.reorder(&tree.primitive_indices);
-        for (i, idx) in tree.primitive_indices.iter_mut().enumerate() {
-            *idx = i as u32;
-        }
-        Self { tree: Some(tree) }
-    }
-
-    /// The traversal ray. Negative zeros in the direction are made positive: the traversal
-    /// picks near and far planes from `d < 0` but inverts `-0.0` to a negative slope, and the
-    /// mismatch would make axis-aligned rays miss.
-    fn bvh_ray(ray: &Ray, t_max: f32) -> BvhRay {
-        BvhRay::new(ray.o.into(), (ray.d + Vec3::ZERO).into(), 0.0, t_max)
+        let bvh2 = build_tree(&bounds);
+        geometry.reorder(&bvh2.primitive_indices);
+        Self { tree: Wide::collapse(&bvh2) }
     }
 }
 
 impl Accel for Bvh {
     fn intersect(&self, geometry: &Geometry, ray: &Ray, t_max: f32) -> Option<PrimHit> {
-        let tree = self.tree.as_ref()?;
         let shear = RayShear::new(ray);
-        let mut best: Option<PrimHit> = None;
-        let mut hit = obvhs::ray::RayHit::none();
-        tree.ray_traverse(Self::bvh_ray(ray, t_max), &mut hit, |r, id| {
-            match geometry.intersect_prim(id as u32, ray, &shear, r.tmax) {
-                Some(hit) => {
-                    best = Some(hit);
-                    hit.t
-                }
-                None => f32::INFINITY,
-            }
-        });
-        best
+        self.tree.closest(ray.o, ray.d, t_max, |prim, t_max| {
+            geometry.intersect_prim(prim, ray, &shear, t_max).map(|hit| (hit.t, hit))
+        })
     }
 
     fn occluded(&self, geometry: &Geometry, ray: &Ray, t_max: f32) -> bool {
-        let Some(tree) = self.tree.as_ref() else {
-            return false;
-        };
         let shear = RayShear::new(ray);
-        !tree.ray_traverse_miss(Self::bvh_ray(ray, t_max), |_, id| {
-            geometry.intersect_prim(id as u32, ray, &shear, t_max).map_or(f32::INFINITY, |h| h.t)
-        })
+        self.tree.any(ray.o, ray.d, t_max, |prim| geometry.intersect_prim(prim, ray, &shear, t_max).is_some())
     }
 }
 
@@ -200,6 +187,55 @@ mod tests {
         assert!((bvh.intersect(&g, &ray, f32::INFINITY).expect("a hit").t - 2.0).abs() < 1e-6);
         assert!(bvh.occluded(&g, &ray, f32::INFINITY));
         assert!(!bvh.occluded(&g, &Ray::new(Vec3::new(3.0, 3.0, 1.0), -Vec3::Z), f32::INFINITY));
+    }
+
+    /// 4,000 coincident triangles under the ray: every child of every node is entered, and
+    /// every entry pushed must come back. The ray finds the plane, and, from below and stopping
+    /// short of it, the one triangle behind.
+    #[test]
+    fn coincident_triangles_deeper_than_the_stack_are_all_traversed() {
+        let count = 4000u32;
+        let tri = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)];
+        let mut positions: Vec<Vec3> = (0..count).flat_map(|_| tri).collect();
+        let mut indices: Vec<[u32; 3]> = (0..count).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        positions.extend(tri.map(|p| p - Vec3::Z));
+        indices.push([3 * count, 3 * count + 1, 3 * count + 2]);
+        let mut g = Geometry::new(vec![Shape::Mesh(TriangleMesh::new(positions, indices, None, None).unwrap())]);
+        let bvh = Bvh::build(&mut g);
+        let ray = Ray::new(Vec3::new(0.3, 0.3, 1.0), -Vec3::Z);
+        let hit = bvh.intersect(&g, &ray, f32::INFINITY).expect("a hit");
+        assert!((hit.t - 1.0).abs() < 1e-6);
+        assert!(g.prims[hit.prim as usize].index < count);
+        assert!(bvh.occluded(&g, &ray, f32::INFINITY));
+        // From below the plane, upwards, stopping short of it: only the far triangle remains.
+        let up = Ray::new(Vec3::new(0.3, 0.3, -3.0), Vec3::Z);
+        let hit = bvh.intersect(&g, &up, 2.5).expect("the triangle at z = -1");
+        assert!((hit.t - 2.0).abs() < 1e-6);
+        assert_eq!(g.prims[hit.prim as usize].index, count);
+        assert!(!bvh.occluded(&g, &up, 1.5));
+    }
+
+    /// A ray whose direction is not finite (a scene file's 1e39 made it so) enters every box,
+    /// the unused child slots included; traversal must skip those, not index by them.
+    #[test]
+    fn rays_with_non_finite_directions_do_not_panic() {
+        let tri = TriangleMesh::new(
+            vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)],
+            vec![[0, 1, 2]],
+            None,
+            None,
+        )
+        .unwrap();
+        let mut g = Geometry::new(vec![
+            Shape::Mesh(tri),
+            Shape::Sphere(Sphere { center: Vec3::splat(3.0), radius: 0.5, reverse_orientation: false }),
+        ]);
+        let bvh = Bvh::build(&mut g);
+        for d in [Vec3::new(f32::NAN, 0.0, 0.0), Vec3::new(f32::INFINITY, 1.0, 0.0), Vec3::splat(f32::NEG_INFINITY)] {
+            let ray = Ray { o: Vec3::new(0.2, 0.2, 1.0), d };
+            let _ = bvh.intersect(&g, &ray, f32::INFINITY);
+            let _ = bvh.occluded(&g, &ray, f32::INFINITY);
+        }
     }
 
     #[test]

@@ -5,6 +5,7 @@ pub mod brute;
 pub mod bvh;
 #[cfg(feature = "embree")]
 pub mod embree;
+mod wide;
 
 pub use brute::BruteForce;
 pub use bvh::Bvh;

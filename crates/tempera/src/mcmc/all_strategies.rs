@@ -122,7 +122,12 @@ mod tests {
 
     /// At every depth of two scenes, the all-strategy estimate of `b_k` agrees with the mean of
     /// MMLT's own target over independent samples (within four combined standard errors) and
-    /// has a smaller relative error at the same number of samples.
+    /// has a smaller relative error at the same number of samples. The one-strategy estimate's
+    /// error is its variance as the all-strategy samples measure it (law of total variance):
+    /// on the default scene its own samples' standard error is unreliable at depth 4, where
+    /// a caustic's rare bright paths make it 0.015–0.065 across seeds 9–14 against 0.022–0.026
+    /// for the all-strategy estimate, whose error is 0.44–0.46 times the measured one there
+    /// (seeds 9–11).
     #[test]
     fn all_strategies_estimate_the_depth_normalisation_with_less_error() {
         for (name, scene) in [
@@ -136,7 +141,10 @@ mod tests {
                 let one = mmlt_target_moments(&scene, k, 9, n);
                 let (all, _) = all_strategies(&scene, k, 9, n);
                 let (ea, eb) = assert_same_mean(&format!("{name} depth {k}"), &one, &all.moments);
-                assert!(eb < 0.8 * ea && eb > 0.0, "{name} depth {k}: relative errors {eb} (all) vs {ea} (one)");
+                let measured = all.target_variance().unwrap();
+                let (mean_all, _) = all.moments.mean_and_rel_se();
+                let e_one = (measured / n as f64).sqrt() / mean_all;
+                assert!(eb < 0.8 * e_one && eb > 0.0, "{name} depth {k}: relative errors {eb} (all) vs {e_one} (one)");
                 // The target's own variance, measured on the all-strategy samples, agrees with
                 // its samples' within 10 % on the Cornell box (a missing factor n = k + 2
                 // would be off by 3 to 6). On the default scene the two differ by 0.8–2.5×
@@ -144,9 +152,9 @@ mod tests {
                 // see far more often.
                 let (mean, rel) = one.mean_and_rel_se();
                 let own = (mean * rel).powi(2) * one.n as f64;
-                let measured = all.target_variance().unwrap();
                 if name == "cornell" {
                     assert!((measured / own - 1.0).abs() < 0.1, "{name} depth {k}: variance {measured} vs {own}");
+                    assert!(eb < 0.8 * ea, "{name} depth {k}: relative errors {eb} (all) vs {ea} (one's own)");
                 }
             }
         }

@@ -292,7 +292,14 @@ impl SceneBuilder {
 
         let mut lights = self.lights;
         let mut prim_light = vec![NO_LIGHT; geometry.prims.len()];
-        for (prim, r) in geometry.prims.iter().enumerate() {
+        // Area lights in the scene's order (shape, then triangle), not the accelerator's
+        // primitive order: light sampling, and so the image, does not depend on the tree.
+        let mut emitters: Vec<usize> = (0..geometry.prims.len())
+            .filter(|&prim| matches!(self.shape_emission.get(geometry.prims[prim].shape as usize), Some(Some(_))))
+            .collect();
+        emitters.sort_unstable_by_key(|&prim| (geometry.prims[prim].shape, geometry.prims[prim].index));
+        for prim in emitters {
+            let r = geometry.prims[prim];
             if let Some(Some(e)) = self.shape_emission.get(r.shape as usize) {
                 prim_light[prim] = lights.len() as u32;
                 lights.push(Light::Area(AreaLight {

@@ -199,3 +199,48 @@ fn one_sided_materials_are_black_from_behind() {
     assert!(eval(Vec3::new(1.0, 0.5, 1.0), -Vec3::Z).x > 0.0, "front side reflects");
     assert_eq!(eval(Vec3::new(1.0, 0.5, -1.0), Vec3::Z), Rgb::ZERO, "back side is black");
 }
+
+/// Area lights are listed in the scene's order (shape, then triangle), whatever order the
+/// accelerator put the primitive table in: 300 emitting triangles scattered over two shapes,
+/// which the BVH reorders by position.
+#[test]
+fn area_lights_follow_the_scene_order_not_the_trees() {
+    let mut b = builder();
+    let m = b.add_material(Material::diffuse(Rgb::ONE));
+    let mut rng = Pcg32::new(9, 1);
+    for _ in 0..2 {
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for t in 0..150u32 {
+            let c = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 10.0;
+            positions.extend([c, c + Vec3::X * 0.1, c + Vec3::Y * 0.1]);
+            indices.push([3 * t, 3 * t + 1, 3 * t + 2]);
+        }
+        let mesh = crate::geometry::TriangleMesh::new(positions, indices, None, None).unwrap();
+        let emission = AreaEmission { radiance: Rgb::ONE.into(), scale: 1.0, two_sided: false };
+        b.add_shape(crate::geometry::Shape::Mesh(mesh), m, Some(emission));
+    }
+    let scene = b.build().unwrap();
+    let order: Vec<(u32, u32)> = scene
+        .lights
+        .iter()
+        .map(|l| match l {
+            Light::Area(a) => {
+                let r = scene.geometry.prims[a.prim as usize];
+                (r.shape, r.index)
+            }
+            _ => panic!("only area lights here"),
+        })
+        .collect();
+    assert_eq!(order.len(), 300);
+    let reordered = (0..scene.geometry.prims.len()).any(|p| {
+        let r = scene.geometry.prims[p];
+        (r.shape as usize * 150 + r.index as usize) != p
+    });
+    assert!(reordered, "the tree left the primitive table in scene order; the test shows nothing");
+    assert!(order.windows(2).all(|w| w[0] < w[1]), "area lights out of scene order");
+    for (l, a) in scene.lights.iter().enumerate() {
+        let Light::Area(a) = a else { unreachable!() };
+        assert_eq!(scene.prim_light[a.prim as usize], l as u32);
+    }
+}
