@@ -50,8 +50,8 @@ pub struct IntegratorFlags {
     #[arg(long, value_enum)]
     pub swap: Option<Swap>,
     /// Tempered MMLT: fixed ladder of temperatures t1,t2,… of replicas 1 … K−1 (increasing,
-    /// positive; up to 1 a roughening of the connection vertices, beyond a power 1/t of the
-    /// fully roughened target).
+    /// in [0, 1000]; up to 1 a roughening of the connection vertices, beyond a power 1/t of the
+    /// fully roughened target; leading zeros, which may repeat, add cold replicas).
     #[arg(long, value_delimiter = ',')]
     pub ladder: Option<Vec<f32>>,
     /// Tempered MMLT: the highest temperature the ladder tuning may reach (1: roughening only).

@@ -170,8 +170,9 @@ pub struct IntegratorSettings {
     /// Tempered MMLT: how replicas exchange states.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub swap: Option<Swap>,
-    /// Tempered MMLT: a fixed ladder of temperatures `τ_1 … τ_{K−1}` (increasing, positive;
-    /// up to 1 a roughening, beyond a power `1/τ` of the fully roughened target).
+    /// Tempered MMLT: a fixed ladder of temperatures `τ_1 … τ_{K−1}` (non-decreasing, in
+    /// `[0, 1000]`; up to 1 a roughening, beyond a power `1/τ` of the fully roughened target;
+    /// leading zeros add cold replicas, further chains of the scene's own target).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ladder: Option<Vec<f32>>,
     /// Tempered MMLT: the highest temperature the ladder tuning may reach (1: roughening only).
@@ -353,11 +354,13 @@ impl IntegratorSettings {
             return Err(format!("radius must be positive, not {r}"));
         }
         if let Some(ladder) = &self.ladder {
-            if ladder.is_empty() || ladder.iter().any(|v| !v.is_finite() || *v <= 0.0 || *v > 1000.0) {
-                return Err(format!("ladder values must lie in (0, 1000], not {ladder:?}"));
+            if ladder.is_empty() || ladder.iter().any(|v| !v.is_finite() || *v < 0.0 || *v > 1000.0) {
+                return Err(format!("ladder values must lie in [0, 1000], not {ladder:?}"));
             }
-            if ladder.windows(2).any(|w| w[1] <= w[0]) {
-                return Err(format!("ladder values must increase, not {ladder:?}"));
+            // Equal temperatures are exact (a swap between them is always accepted); only
+            // cold replicas (τ = 0) may repeat, hot rungs must increase.
+            if ladder.windows(2).any(|w| w[1] < w[0] || (w[1] == w[0] && w[0] > 0.0)) {
+                return Err(format!("ladder values must increase (only zeros may repeat), not {ladder:?}"));
             }
             // A ladder fixes the number of replicas; both given must agree.
             if let Some(r) = self.replicas
@@ -491,11 +494,16 @@ mod tests {
     fn settings_are_checked_against_the_integrator_and_each_other() {
         let ok = IntegratorSettings { replicas: Some(3), ladder: Some(vec![0.1, 0.3]), ..Default::default() };
         assert!(create(IntegratorKind::Tempered, &ok, &RenderDefaults::default()).is_ok());
+        // Cold replicas: only zeros may repeat.
+        let cold = IntegratorSettings { replicas: Some(4), ladder: Some(vec![0.0, 0.0, 0.3]), ..Default::default() };
+        assert!(create(IntegratorKind::Tempered, &cold, &RenderDefaults::default()).is_ok());
         let cases = [
             (IntegratorKind::Mmlt, IntegratorSettings { replicas: Some(3), ..Default::default() }, "replicas is not"),
             (IntegratorKind::Path, IntegratorSettings { mis: Some(Heuristic::Balance), ..Default::default() }, "mis"),
             (IntegratorKind::Tempered, IntegratorSettings { replicas: Some(4), ..ok.clone() }, "must be 3"),
             (IntegratorKind::Tempered, IntegratorSettings { ladder: Some(vec![0.3, 0.1]), ..ok.clone() }, "increase"),
+            (IntegratorKind::Tempered, IntegratorSettings { ladder: Some(vec![0.3, 0.3]), ..ok.clone() }, "increase"),
+            (IntegratorKind::Tempered, IntegratorSettings { ladder: Some(vec![-0.1, 0.3]), ..ok.clone() }, "[0, 1000]"),
             (IntegratorKind::Mmlt, IntegratorSettings { large_step: Some(0.0), ..Default::default() }, "probability"),
             (IntegratorKind::Mmlt, IntegratorSettings { chains: Some(0), ..Default::default() }, "chains must lie"),
             (

@@ -294,21 +294,21 @@ impl SceneBuilder {
         let mut prim_light = vec![NO_LIGHT; geometry.prims.len()];
         // Area lights in the scene's order (shape, then triangle), not the accelerator's
         // primitive order: light sampling, and so the image, does not depend on the tree.
-        let mut emitters: Vec<usize> = (0..geometry.prims.len())
-            .filter(|&prim| matches!(self.shape_emission.get(geometry.prims[prim].shape as usize), Some(Some(_))))
+        let mut emitters: Vec<(usize, &AreaEmission)> = (0..geometry.prims.len())
+            .filter_map(|prim| match self.shape_emission.get(geometry.prims[prim].shape as usize) {
+                Some(Some(e)) => Some((prim, e)),
+                _ => None,
+            })
             .collect();
-        emitters.sort_unstable_by_key(|&prim| (geometry.prims[prim].shape, geometry.prims[prim].index));
-        for prim in emitters {
-            let r = geometry.prims[prim];
-            if let Some(Some(e)) = self.shape_emission.get(r.shape as usize) {
-                prim_light[prim] = lights.len() as u32;
-                lights.push(Light::Area(AreaLight {
-                    prim: prim as u32,
-                    radiance: e.radiance.clone(),
-                    scale: e.scale,
-                    two_sided: e.two_sided,
-                }));
-            }
+        emitters.sort_unstable_by_key(|&(prim, _)| (geometry.prims[prim].shape, geometry.prims[prim].index));
+        for (prim, e) in emitters {
+            prim_light[prim] = lights.len() as u32;
+            lights.push(Light::Area(AreaLight {
+                prim: prim as u32,
+                radiance: e.radiance.clone(),
+                scale: e.scale,
+                two_sided: e.two_sided,
+            }));
         }
         let radius = if bounds.0.is_finite() { 0.5 * (bounds.1 - bounds.0).length() } else { 1.0 };
         let powers: Vec<f32> = lights.iter().map(|l| l.power(&geometry, radius)).collect();

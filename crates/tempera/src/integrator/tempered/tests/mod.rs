@@ -328,6 +328,8 @@ mod integrator {
         let power = TemperedIntegrator { flattening: Flattening::Power, replicas: 3, ..base.clone() };
         // Hot replicas that propose only large steps (independent uniform samples).
         let independent = TemperedIntegrator { hot_large_step: Some(1.0), ..power.clone() };
+        // Two cold replicas sharing one hot one (a ladder with a repeated zero).
+        let shared = TemperedIntegrator { ladder: vec![0.0, 1.0], replicas: 3, ..base.clone() };
         let every_sweep = base.render(&scene, &settings(256, 2, 0), &control).unwrap().stats.rays;
         let cases = [
             ("hot", hot),
@@ -336,6 +338,7 @@ mod integrator {
             ("lazy", lazy),
             ("power", power),
             ("independent", independent),
+            ("shared", shared),
         ];
         for (name, t) in cases {
             let out = t.render(&scene, &settings(256, 2, 0), &control).unwrap();
@@ -354,6 +357,13 @@ mod integrator {
                         let same = d.ladder.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-4);
                         assert!(d.ladder.len() == 4 && same, "depth {}: ladder {:?}", d.depth, d.ladder);
                         assert!(d.prepare_seconds > 0.0, "depth {}: the calibration takes time", d.depth);
+                    }
+                    "shared" => {
+                        assert_eq!(d.ladder, vec![0.0, 0.0, 1.0], "depth {}", d.depth);
+                        // Exchanges between the two cold replicas are always accepted.
+                        let swaps = d.swaps.as_ref().expect("an ensemble's swaps");
+                        assert!(swaps.attempts[1] > 0 && swaps.accepted[1] == swaps.attempts[1], "{swaps:?}");
+                        assert!(swaps.accepted[5] < swaps.attempts[5], "depth {}: {swaps:?}", d.depth);
                     }
                     "power" | "independent" => {
                         let ladder = &d.ladder;
