@@ -170,9 +170,10 @@ pub struct IntegratorSettings {
     /// Tempered MMLT: how replicas exchange states.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub swap: Option<Swap>,
-    /// Tempered MMLT: a fixed ladder of temperatures `τ_1 … τ_{K−1}` (non-decreasing, in
-    /// `[0, 1000]`; up to 1 a roughening, beyond a power `1/τ` of the fully roughened target;
-    /// leading zeros add cold replicas, further chains of the scene's own target).
+    /// Tempered MMLT: a fixed ladder of temperatures `τ_1 … τ_{K−1}` (in `[0, 1000]`,
+    /// increasing but for leading zeros, which may repeat and add cold replicas: further chains
+    /// of the scene's own target; up to 1 a roughening, beyond a power `1/τ` of the fully
+    /// roughened target).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ladder: Option<Vec<f32>>,
     /// Tempered MMLT: the highest temperature the ladder tuning may reach (1: roughening only).

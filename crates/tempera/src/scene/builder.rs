@@ -295,9 +295,9 @@ impl SceneBuilder {
         // Area lights in the scene's order (shape, then triangle), not the accelerator's
         // primitive order: light sampling, and so the image, does not depend on the tree.
         let mut emitters: Vec<(usize, &AreaEmission)> = (0..geometry.prims.len())
-            .filter_map(|prim| match self.shape_emission.get(geometry.prims[prim].shape as usize) {
-                Some(Some(e)) => Some((prim, e)),
-                _ => None,
+            .filter_map(|prim| {
+                let emission = self.shape_emission.get(geometry.prims[prim].shape as usize);
+                emission.and_then(Option::as_ref).map(|e| (prim, e))
             })
             .collect();
         emitters.sort_unstable_by_key(|&(prim, _)| (geometry.prims[prim].shape, geometry.prims[prim].index));
