@@ -14,8 +14,9 @@ use obvhs::bvh2::Bvh2;
 const WIDTH: usize = 4;
 /// `1 + 2γ₃`, with `γₙ = nε / (1 − nε)` and `ε` half the machine epsilon.
 const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
-/// A child slot in use by no child. Its box is empty, but a ray whose direction is not finite
-/// (NaN distances are left out of the test) still enters it, so traversal skips it by index.
+/// A child slot in use by no child. Its box is empty (`+∞` to `−∞`), which a ray with a finite
+/// origin and direction never enters (its distances there are `±∞`, never NaN); a ray that is
+/// not finite could (NaN distances are left out of the test), so traversal takes none.
 const EMPTY: u32 = u32::MAX;
 
 /// One node: the four children's boxes as `[min x, max x, min y, max y, min z, max z]` lanes,
@@ -153,7 +154,7 @@ impl Wide {
     where
         F: FnMut(u32, f32) -> Option<(f32, H)>,
     {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !(o.is_finite() && d.is_finite()) {
             return None;
         }
         let ray = BoxRay::new(o, d);
@@ -164,30 +165,44 @@ impl Wide {
             if item.count == 0 {
                 let node = &self.nodes[item.child as usize];
                 let (t, mut mask) = ray.test(node, t_max);
-                // The hit children, nearest first.
-                let mut hits = [Item { child: 0, count: 0, t: 0.0 }; WIDTH];
-                let mut n = 0;
-                while mask != 0 {
-                    let i = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if node.child[i] == EMPTY {
+                let slot = |i: usize| Item { child: node.child[i], count: node.count[i], t: t[i] };
+                // The hit children, nearest first (the lower slot first at equal distances);
+                // the nearest is visited next, the others pushed farthest first.
+                match mask.count_ones() {
+                    0 => {}
+                    1 => {
+                        item = slot(mask.trailing_zeros() as usize);
                         continue;
                     }
-                    let new = Item { child: node.child[i], count: node.count[i], t: t[i] };
-                    let mut j = n;
-                    while j > 0 && hits[j - 1].t > new.t {
-                        hits[j] = hits[j - 1];
-                        j -= 1;
+                    2 => {
+                        let a = mask.trailing_zeros() as usize;
+                        let b = (mask & (mask - 1)).trailing_zeros() as usize;
+                        let (near, far) = if t[b] < t[a] { (b, a) } else { (a, b) };
+                        stack.push(slot(far));
+                        item = slot(near);
+                        continue;
                     }
-                    hits[j] = new;
-                    n += 1;
-                }
-                if n > 0 {
-                    for h in hits[1..n].iter().rev() {
-                        stack.push(*h);
+                    _ => {
+                        let mut hits = [Item { child: 0, count: 0, t: 0.0 }; WIDTH];
+                        let mut n = 0;
+                        while mask != 0 {
+                            let i = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            let new = slot(i);
+                            let mut j = n;
+                            while j > 0 && hits[j - 1].t > new.t {
+                                hits[j] = hits[j - 1];
+                                j -= 1;
+                            }
+                            hits[j] = new;
+                            n += 1;
+                        }
+                        for h in hits[1..n].iter().rev() {
+                            stack.push(*h);
+                        }
+                        item = hits[0];
+                        continue;
                     }
-                    item = hits[0];
-                    continue;
                 }
             } else {
                 for prim in item.child..item.child + item.count {
@@ -215,7 +230,7 @@ impl Wide {
     /// particular order: the first blocker found ends the query.
     #[inline]
     pub fn any<F: FnMut(u32) -> bool>(&self, o: Vec3, d: Vec3, t_max: f32, mut blocks: F) -> bool {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !(o.is_finite() && d.is_finite()) {
             return false;
         }
         let ray = BoxRay::new(o, d);
@@ -228,9 +243,6 @@ impl Wide {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 if n.count[i] == 0 {
-                    if n.child[i] == EMPTY {
-                        continue;
-                    }
                     stack.push(Item { child: n.child[i], count: 0, t: 0.0 });
                 } else if (n.child[i]..n.child[i] + n.count[i]).any(&mut blocks) {
                     return true;
