@@ -16,7 +16,8 @@ const WIDTH: usize = 4;
 const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 /// A child slot in use by no child. Its box is empty (`+∞` to `−∞`), which a ray with a finite
 /// origin and direction never enters (its distances there are `±∞`, never NaN); a ray that is
-/// not finite could (NaN distances are left out of the test), so traversal takes none.
+/// not finite could (NaN distances are left out of the test), so traversal answers such a ray
+/// before it reads a node.
 const EMPTY: u32 = u32::MAX;
 
 /// One node: the four children's boxes as `[min x, max x, min y, max y, min z, max z]` lanes,
