@@ -8,6 +8,7 @@ pub mod bsdf;
 pub mod geometry;
 pub mod math;
 pub mod mcmc;
+pub mod pages;
 pub mod texture;
 
 pub mod camera;

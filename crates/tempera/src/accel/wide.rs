@@ -8,6 +8,7 @@
 //! touches (Ize 2013, "Robust BVH Ray Traversal"; pbrt-v4 §6.1.2).
 
 use crate::math::Vec3;
+use crate::pages::PageVec;
 use obvhs::bvh2::Bvh2;
 
 /// Lanes per node.
@@ -23,7 +24,7 @@ const EMPTY: u32 = u32::MAX;
 /// One node: the four children's boxes as `[min x, max x, min y, max y, min z, max z]` lanes,
 /// and per child either an inner node's index (`count == 0`) or a leaf's first primitive and
 /// primitive count.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(64))]
 struct Node {
     bounds: [[f32; WIDTH]; 6],
@@ -102,7 +103,7 @@ impl BoxRay {
 /// The tree. An empty tree has no nodes.
 #[derive(Clone, Debug, Default)]
 pub struct Wide {
-    nodes: Vec<Node>,
+    nodes: PageVec<Node>,
 }
 
 impl Wide {
@@ -117,7 +118,7 @@ impl Wide {
         let mut nodes = vec![Node::EMPTY];
         if root.is_leaf() {
             set_slot(&mut nodes[0], 0, bvh2, 0, 0);
-            return Self { nodes };
+            return Self { nodes: nodes.into() };
         }
         // (binary inner node, the wide node that becomes it)
         let mut work = vec![(0usize, 0usize)];
@@ -145,7 +146,7 @@ impl Wide {
                 set_slot(&mut nodes[w], slot, bvh2, c, child as u32);
             }
         }
-        Self { nodes }
+        Self { nodes: nodes.into() }
     }
 
     /// The nearest primitive hit: `hit(prim, t_max)` returns the distance of a hit of primitive
@@ -155,7 +156,8 @@ impl Wide {
     where
         F: FnMut(u32, f32) -> Option<(f32, H)>,
     {
-        if self.nodes.is_empty() || !(o.is_finite() && d.is_finite()) {
+        let nodes: &[Node] = &self.nodes;
+        if nodes.is_empty() || !(o.is_finite() && d.is_finite()) {
             return None;
         }
         let ray = BoxRay::new(o, d);
@@ -164,7 +166,7 @@ impl Wide {
         let mut item = Item { child: 0, count: 0, t: 0.0 };
         loop {
             if item.count == 0 {
-                let node = &self.nodes[item.child as usize];
+                let node = &nodes[item.child as usize];
                 let (t, mut mask) = ray.test(node, t_max);
                 let slot = |i: usize| Item { child: node.child[i], count: node.count[i], t: t[i] };
                 // The hit children, nearest first (the lower slot first at equal distances);
@@ -231,14 +233,15 @@ impl Wide {
     /// particular order: the first blocker found ends the query.
     #[inline]
     pub fn any<F: FnMut(u32) -> bool>(&self, o: Vec3, d: Vec3, t_max: f32, mut blocks: F) -> bool {
-        if self.nodes.is_empty() || !(o.is_finite() && d.is_finite()) {
+        let nodes: &[Node] = &self.nodes;
+        if nodes.is_empty() || !(o.is_finite() && d.is_finite()) {
             return false;
         }
         let ray = BoxRay::new(o, d);
         let mut stack = Stack::new();
         let mut node = 0u32;
         loop {
-            let n = &self.nodes[node as usize];
+            let n = &nodes[node as usize];
             let (_, mut mask) = ray.test(n, t_max);
             while mask != 0 {
                 let i = mask.trailing_zeros() as usize;

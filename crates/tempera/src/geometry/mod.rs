@@ -16,6 +16,7 @@ pub use sphere::{ShapeSample, Sphere};
 pub use triangle::{RayShear, intersect_triangle};
 
 use crate::math::{Vec2, Vec3};
+use crate::pages::PageVec;
 use crate::texture::Texture;
 
 /// Geometric data of a surface point.
@@ -69,14 +70,31 @@ pub struct PrimHit {
 /// `PrimRef::shape` of a primitive that is an object instance (`index` is the instance).
 pub const INSTANCE: u32 = u32::MAX;
 
+/// A triangle primitive's vertices as the intersection test reads them, or a mark that the
+/// primitive is not a triangle (an analytic shape or an instance).
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct CachedTriangle {
+    p: [[f32; 3]; 3],
+    /// 1 for a triangle, 0 otherwise.
+    triangle: u32,
+}
+
+impl CachedTriangle {
+    #[inline(always)]
+    fn get(&self) -> Option<[Vec3; 3]> {
+        (self.triangle != 0).then(|| self.p.map(Vec3::from_array))
+    }
+}
+
 /// All shapes of a scene and the primitive table over them. Triangle vertices are also cached
 /// per primitive, in primitive order, so that intersection tests read one contiguous record.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     pub shapes: Vec<Shape>,
     pub prims: Vec<PrimRef>,
-    /// Vertices of triangle primitives (`None` for analytic shapes), aligned with `prims`.
-    triangles: Vec<Option<[Vec3; 3]>>,
+    /// Vertices of triangle primitives, aligned with `prims`.
+    triangles: PageVec<CachedTriangle>,
     /// Alpha (cut-out) texture per shape; empty when no shape has one.
     alpha: Vec<Option<Texture>>,
     pub prototypes: Vec<Prototype>,
@@ -99,23 +117,22 @@ impl Geometry {
 
     fn cache_triangles(&mut self) {
         use rayon::prelude::*;
-        self.triangles = self
-            .prims
-            .par_iter()
-            .map(|r| match self.shapes.get(r.shape as usize) {
-                Some(Shape::Mesh(m)) => Some(m.vertices(r.index)),
-                Some(Shape::Sphere(_) | Shape::Disk(_)) | None => None,
-            })
-            .collect();
+        let mut triangles = PageVec::zeroed(self.prims.len());
+        triangles.par_iter_mut().zip(self.prims.par_iter()).for_each(|(t, r)| {
+            if let Some(Shape::Mesh(m)) = self.shapes.get(r.shape as usize) {
+                *t = CachedTriangle { p: m.vertices(r.index).map(|v| v.to_array()), triangle: 1 };
+            }
+        });
+        self.triangles = triangles;
     }
 
     /// Adds instances of prototypes as primitives.
     pub fn add_instances(&mut self, prototypes: Vec<Prototype>, instances: Vec<Instance>) {
         let first = self.instances.len() as u32;
         self.prims.extend((0..instances.len() as u32).map(|k| PrimRef { shape: INSTANCE, index: first + k }));
-        self.triangles.extend(instances.iter().map(|_| None));
         self.prototypes.extend(prototypes);
         self.instances.extend(instances);
+        self.cache_triangles();
     }
 
     /// The instance primitive `i` places, if it is one.
@@ -164,7 +181,7 @@ impl Geometry {
 
     /// The vertices of primitive `i` when it is a triangle outside instances.
     pub fn triangle(&self, i: u32) -> Option<[Vec3; 3]> {
-        self.triangles[i as usize]
+        self.triangles[i as usize].get()
     }
 
     /// Whether primitive `i` belongs to a shape with an alpha (cut-out) texture.
@@ -196,7 +213,7 @@ impl Geometry {
     /// Intersects primitive `i`, returning the distance and hit parameters.
     #[inline]
     pub fn intersect_prim(&self, i: u32, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<PrimHit> {
-        let hit = match self.triangles[i as usize] {
+        let hit = match self.triangles[i as usize].get() {
             Some(tri) => intersect_triangle(ray, shear, tri, t_max).map(|h| (h.t, h.b)),
             None => {
                 let r = self.prims[i as usize];
