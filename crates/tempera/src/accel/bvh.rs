@@ -1,12 +1,15 @@
 //! The default accelerator: a binary tree built by PLOC with reinsertion and SAH leaf
 //! collapsing (the `obvhs` crate), collapsed into the four-wide tree of [`super::wide`] that
-//! rays traverse. The geometry's primitive table is reordered to the tree's leaf order so that
-//! leaves index it directly.
+//! rays traverse. The geometry's primitive table is reordered to the tree's leaf order, and each
+//! leaf's primitives are copied into [`Packet`]s of four whose triangles are tested together;
+//! the tree's leaves index the packets.
 
 use super::Accel;
 use super::wide::Wide;
+use crate::geometry::packet::{LANES, Packet};
 use crate::geometry::{Geometry, PrimHit, Ray, RayShear};
 use crate::math::Vec3;
+use crate::pages::PageVec;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
@@ -58,6 +61,7 @@ fn build_tree(bounds: &[Bounds]) -> Bvh2 {
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
     tree: Wide,
+    packets: PageVec<Packet>,
 }
 
 impl Bvh {
@@ -77,21 +81,36 @@ impl Bvh {
             .collect();
         let bvh2 = build_tree(&bounds);
         geometry.reorder(&bvh2.primitive_indices);
-        Self { tree: Wide::collapse(&bvh2) }
+        let mut tree = Wide::collapse(&bvh2);
+        // Each packet's primitives: `(first, count)`, the packets of a leaf consecutive.
+        let mut ranges: Vec<(u32, u32)> = Vec::new();
+        tree.remap_leaves(|first, count| {
+            let start = ranges.len() as u32;
+            let lanes = LANES as u32;
+            ranges.extend((first..first + count).step_by(LANES).map(|p| (p, (first + count - p).min(lanes))));
+            (start, ranges.len() as u32 - start)
+        });
+        let mut packets = PageVec::zeroed(ranges.len());
+        packets.par_iter_mut().zip(ranges.par_iter()).for_each(|(packet, &(first, count))| {
+            Packet::fill(geometry, first, count, std::slice::from_mut(packet));
+        });
+        Self { tree, packets }
     }
 }
 
 impl Accel for Bvh {
     fn intersect(&self, geometry: &Geometry, ray: &Ray, t_max: f32) -> Option<PrimHit> {
         let shear = RayShear::new(ray);
-        self.tree.closest(ray.o, ray.d, t_max, |prim, t_max| {
-            geometry.intersect_prim(prim, ray, &shear, t_max).map(|hit| (hit.t, hit))
+        let packets: &[Packet] = &self.packets;
+        self.tree.closest(ray.o, ray.d, t_max, |p, t_max| {
+            packets[p as usize].closest(geometry, ray, &shear, t_max).map(|hit| (hit.t, hit))
         })
     }
 
     fn occluded(&self, geometry: &Geometry, ray: &Ray, t_max: f32) -> bool {
         let shear = RayShear::new(ray);
-        self.tree.any(ray.o, ray.d, t_max, |prim| geometry.intersect_prim(prim, ray, &shear, t_max).is_some())
+        let packets: &[Packet] = &self.packets;
+        self.tree.any(ray.o, ray.d, t_max, |p| packets[p as usize].any(geometry, ray, &shear, t_max))
     }
 }
 

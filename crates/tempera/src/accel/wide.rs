@@ -149,6 +149,25 @@ impl Wide {
         Self { nodes: nodes.into() }
     }
 
+    /// Replaces each leaf's range `(first, count)` by `f(first, count)` (a range of whatever
+    /// the leaves' items become), calling `f` in the order of the leaves' first items.
+    pub fn remap_leaves(&mut self, mut f: impl FnMut(u32, u32) -> (u32, u32)) {
+        let mut leaves: Vec<(u32, u32, u8)> = Vec::new();
+        for (n, node) in self.nodes.iter().enumerate() {
+            for slot in 0..WIDTH {
+                if node.count[slot] > 0 {
+                    leaves.push((node.child[slot], n as u32, slot as u8));
+                }
+            }
+        }
+        leaves.sort_unstable();
+        for (_, n, slot) in leaves {
+            let node = &mut self.nodes[n as usize];
+            let slot = slot as usize;
+            (node.child[slot], node.count[slot]) = f(node.child[slot], node.count[slot]);
+        }
+    }
+
     /// The nearest primitive hit: `hit(prim, t_max)` returns the distance of a hit of primitive
     /// `prim` closer than `t_max`, if any, and what to return for it.
     #[inline]

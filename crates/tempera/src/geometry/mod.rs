@@ -4,6 +4,7 @@
 pub mod disk;
 pub mod instance;
 pub mod mesh;
+pub mod packet;
 pub mod ray;
 pub mod sphere;
 pub mod triangle;

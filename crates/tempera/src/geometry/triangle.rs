@@ -7,12 +7,12 @@ use crate::math::Vec3;
 /// Per-ray constants of the watertight test: the axis permutation and the shear.
 #[derive(Clone, Copy, Debug)]
 pub struct RayShear {
-    kz: usize,
+    pub(super) kz: usize,
     /// The ray origin, permuted.
-    o: Vec3,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    pub(super) o: Vec3,
+    pub(super) sx: f32,
+    pub(super) sy: f32,
+    pub(super) sz: f32,
 }
 
 impl RayShear {
