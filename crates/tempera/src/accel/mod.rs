@@ -64,7 +64,10 @@ impl SceneAccel {
         match kind {
             AccelKind::Bvh => Ok(SceneAccel::Bvh(Bvh::build(geometry))),
             #[cfg(feature = "embree")]
-            AccelKind::Embree => embree::EmbreeAccel::build(geometry).map(SceneAccel::Embree),
+            AccelKind::Embree => {
+                geometry.ensure_triangle_cache();
+                embree::EmbreeAccel::build(geometry).map(SceneAccel::Embree)
+            }
             #[cfg(not(feature = "embree"))]
             AccelKind::Embree => Err("this build has no Embree (build with `--features embree`)".into()),
         }

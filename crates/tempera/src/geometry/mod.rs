@@ -94,7 +94,8 @@ impl CachedTriangle {
 pub struct Geometry {
     pub shapes: Vec<Shape>,
     pub prims: Vec<PrimRef>,
-    /// Vertices of triangle primitives, aligned with `prims`.
+    /// Vertices of triangle primitives, aligned with `prims`; empty once an accelerator that
+    /// keeps its own copy (the BVH's packets) has taken over the triangle tests.
     triangles: PageVec<CachedTriangle>,
     /// Alpha (cut-out) texture per shape; empty when no shape has one.
     alpha: Vec<Option<Texture>>,
@@ -125,6 +126,19 @@ impl Geometry {
             }
         });
         self.triangles = triangles;
+    }
+
+    /// Frees the triangle cache: triangles are then read from their meshes when a test outside
+    /// the BVH's packets needs them.
+    pub fn drop_triangle_cache(&mut self) {
+        self.triangles = PageVec::default();
+    }
+
+    /// Rebuilds the triangle cache if it was dropped (for an accelerator that reads it).
+    pub fn ensure_triangle_cache(&mut self) {
+        if self.triangles.len() != self.prims.len() {
+            self.cache_triangles();
+        }
     }
 
     /// Adds instances of prototypes as primitives.
@@ -181,8 +195,15 @@ impl Geometry {
     }
 
     /// The vertices of primitive `i` when it is a triangle outside instances.
+    #[inline]
     pub fn triangle(&self, i: u32) -> Option<[Vec3; 3]> {
-        self.triangles[i as usize].get()
+        match self.triangles.get(i as usize) {
+            Some(cached) => cached.get(),
+            None => match self.shapes.get(self.prims[i as usize].shape as usize) {
+                Some(Shape::Mesh(m)) => Some(m.vertices(self.prims[i as usize].index)),
+                Some(Shape::Sphere(_) | Shape::Disk(_)) | None => None,
+            },
+        }
     }
 
     /// Whether primitive `i` belongs to a shape with an alpha (cut-out) texture.
@@ -190,7 +211,9 @@ impl Geometry {
         !self.alpha.is_empty() && self.alpha[self.prims[i as usize].shape as usize].is_some()
     }
 
-    fn alpha_keeps(&self, i: u32, ray: &Ray, t: f32, b: Vec3) -> bool {
+    /// Whether the alpha texture of primitive `i`'s shape, if it has one, keeps the hit at
+    /// distance `t` with barycentrics `b`.
+    pub(crate) fn alpha_keeps(&self, i: u32, ray: &Ray, t: f32, b: Vec3) -> bool {
         let r = self.prims[i as usize];
         let Some(alpha) = &self.alpha[r.shape as usize] else { return true };
         let uv = match &self.shapes[r.shape as usize] {
@@ -214,7 +237,7 @@ impl Geometry {
     /// Intersects primitive `i`, returning the distance and hit parameters.
     #[inline]
     pub fn intersect_prim(&self, i: u32, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<PrimHit> {
-        let hit = match self.triangles[i as usize].get() {
+        let hit = match self.triangle(i) {
             Some(tri) => intersect_triangle(ray, shear, tri, t_max).map(|h| (h.t, h.b)),
             None => {
                 let r = self.prims[i as usize];

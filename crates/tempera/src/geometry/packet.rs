@@ -5,8 +5,10 @@
 //! the same distances and barycentrics bit for bit; only the part of the test that depends on
 //! `t_max` runs per lane, in the primitives' order, so that the nearest of equally distant hits
 //! is the one the scalar loop would keep. A lane whose edge functions hit zero takes the scalar
-//! test (its double-precision fallback); lanes holding anything but a triangle without an alpha
-//! texture (spheres, disks, instances, cut-outs) go to [`Geometry::intersect_prim`].
+//! test (its double-precision fallback); a triangle with an alpha texture is kept or dropped by
+//! the texture as in [`Geometry::intersect_prim`], and lanes holding other primitives (spheres,
+//! disks, instances) go to it. The packets hold the only copy of the BVH's triangles in the
+//! tree's order: the geometry's own triangle cache is freed once they are built.
 
 use super::triangle::{RayShear, intersect_triangle};
 use super::{Geometry, PrimHit, Ray};
@@ -27,7 +29,9 @@ pub struct Packet {
     used: u32,
     /// Lanes in use that hold a triangle tested here.
     tri: u32,
-    _pad: [u32; 2],
+    /// Triangle lanes whose shape has an alpha texture, which decides each of their hits.
+    alpha: u32,
+    _pad: u32,
 }
 
 /// The per-lane values of the test that do not depend on `t_max`.
@@ -53,15 +57,16 @@ impl Packet {
         for (k, packet) in out.iter_mut().enumerate() {
             let start = first + (k * LANES) as u32;
             let n = (first + count - start).min(LANES as u32);
-            *packet = Packet { p: [[[0.0; LANES]; 3]; 3], prim: [0; LANES], used: 0, tri: 0, _pad: [0; 2] };
+            *packet = Packet { p: [[[0.0; LANES]; 3]; 3], prim: [0; LANES], used: 0, tri: 0, alpha: 0, _pad: 0 };
             for lane in 0..n as usize {
                 let prim = start + lane as u32;
                 packet.prim[lane] = prim;
                 packet.used |= 1 << lane;
-                if let Some(tri) = geometry.triangle(prim)
-                    && !geometry.has_alpha(prim)
-                {
+                if let Some(tri) = geometry.triangle(prim) {
                     packet.tri |= 1 << lane;
+                    if geometry.has_alpha(prim) {
+                        packet.alpha |= 1 << lane;
+                    }
                     for (v, p) in tri.iter().enumerate() {
                         for a in 0..3 {
                             packet.p[v][a][lane] = p[a];
@@ -136,35 +141,47 @@ impl Packet {
         (t > 0.0 && t < t_max).then_some((t, inv_det))
     }
 
+    /// Triangle lane `i`'s hit closer than `t_max`, alpha texture included.
+    #[inline(always)]
+    fn triangle_hit(
+        &self,
+        l: &Lanes,
+        i: usize,
+        geometry: &Geometry,
+        ray: &Ray,
+        shear: &RayShear,
+        t_max: f32,
+    ) -> Option<PrimHit> {
+        let bit = 1 << i;
+        let prim = self.prim[i];
+        let hit = if l.pass & bit != 0 {
+            let (t, inv_det) = Self::distance(l, i, t_max)?;
+            PrimHit { prim, t, b: Vec3::new(l.e[0][i], l.e[1][i], l.e[2][i]) * inv_det, inner: 0 }
+        } else if l.exact & bit != 0 {
+            let h = intersect_triangle(ray, shear, self.vertices(i), t_max)?;
+            PrimHit { prim, t: h.t, b: h.b, inner: 0 }
+        } else {
+            return None;
+        };
+        if self.alpha & bit != 0 && !geometry.alpha_keeps(prim, ray, hit.t, hit.b) {
+            return None;
+        }
+        Some(hit)
+    }
+
     /// The nearest hit closer than `t_max` among the packet's primitives.
     #[inline]
     pub fn closest(&self, geometry: &Geometry, ray: &Ray, shear: &RayShear, mut t_max: f32) -> Option<PrimHit> {
         let l = self.lanes(shear);
         let mut best = None;
-        let mut lanes = self.used;
+        let mut lanes = (l.pass | l.exact) | (self.used & !self.tri);
         while lanes != 0 {
             let i = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
-            let bit = 1 << i;
-            let prim = self.prim[i];
-            let hit = if l.pass & bit != 0 {
-                Self::distance(&l, i, t_max).map(|(t, inv_det)| PrimHit {
-                    prim,
-                    t,
-                    b: Vec3::new(l.e[0][i], l.e[1][i], l.e[2][i]) * inv_det,
-                    inner: 0,
-                })
-            } else if l.exact & bit != 0 {
-                intersect_triangle(ray, shear, self.vertices(i), t_max).map(|h| PrimHit {
-                    prim,
-                    t: h.t,
-                    b: h.b,
-                    inner: 0,
-                })
-            } else if self.tri & bit == 0 {
-                geometry.intersect_prim(prim, ray, shear, t_max)
+            let hit = if self.tri & (1 << i) != 0 {
+                self.triangle_hit(&l, i, geometry, ray, shear, t_max)
             } else {
-                None
+                geometry.intersect_prim(self.prim[i], ray, shear, t_max)
             };
             if let Some(hit) = hit {
                 t_max = hit.t;
@@ -178,19 +195,11 @@ impl Packet {
     #[inline]
     pub fn any(&self, geometry: &Geometry, ray: &Ray, shear: &RayShear, t_max: f32) -> bool {
         let l = self.lanes(shear);
-        let mut lanes = l.pass;
+        let mut lanes = l.pass | l.exact;
         while lanes != 0 {
             let i = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
-            if Self::distance(&l, i, t_max).is_some() {
-                return true;
-            }
-        }
-        let mut lanes = l.exact;
-        while lanes != 0 {
-            let i = lanes.trailing_zeros() as usize;
-            lanes &= lanes - 1;
-            if intersect_triangle(ray, shear, self.vertices(i), t_max).is_some() {
+            if self.triangle_hit(&l, i, geometry, ray, shear, t_max).is_some() {
                 return true;
             }
         }
@@ -264,11 +273,21 @@ mod tests {
         for _ in 0..6 {
             shapes.push(Shape::Sphere(Sphere { center: r3(&mut rng) * 0.5, radius: 0.15, reverse_orientation: false }));
         }
-        let g = Geometry::new(shapes);
+        // Cut-out triangles: an alpha of one half keeps about half of their hits.
+        let mut cut = Vec::new();
+        for _ in 0..20 {
+            let c = r3(&mut rng) * 0.5;
+            cut.extend([c, c + r3(&mut rng) * 0.6, c + r3(&mut rng) * 0.6]);
+        }
+        let cut_indices = (0..20u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        shapes.push(Shape::Mesh(TriangleMesh::new(cut, cut_indices, None, None).unwrap()));
+        let mut g = Geometry::new(shapes);
+        g.set_alpha(g.shapes.len() - 1, 0.5.into());
         let n = g.prims.len() as u32;
         let mut packets = vec![bytemuck::Zeroable::zeroed(); Packet::count(n) as usize];
         Packet::fill(&g, 0, n, &mut packets);
         assert!(packets.iter().any(|p| p.tri != p.used), "no lane of another primitive");
+        assert!(packets.iter().any(|p| p.alpha != 0), "no cut-out lane");
         let mut hits = 0;
         for i in 0..20_000 {
             let ray = if i % 4 == 0 {
