@@ -94,8 +94,6 @@ impl Bvh {
         packets.par_iter_mut().zip(ranges.par_iter()).for_each(|(packet, &(first, count))| {
             Packet::fill(geometry, first, count, std::slice::from_mut(packet));
         });
-        // The packets hold every triangle the BVH tests.
-        geometry.drop_triangle_cache();
         Self { tree, packets }
     }
 }

@@ -350,9 +350,11 @@ impl Geometry {
         })
     }
 
-    /// Reorders the primitive table (the accelerator stores primitives in its own order).
+    /// Reorders the primitive table (the accelerator stores primitives in its own order). The
+    /// triangle cache is dropped, not reordered: the BVH, the one caller, keeps its own copy
+    /// ([`Self::ensure_triangle_cache`] rebuilds it).
     pub fn reorder(&mut self, order: &[u32]) {
         self.prims = order.iter().map(|&i| self.prims[i as usize]).collect();
-        self.cache_triangles();
+        self.drop_triangle_cache();
     }
 }
