@@ -195,14 +195,21 @@ impl Geometry {
     }
 
     /// The vertices of primitive `i` when it is a triangle outside instances.
-    #[inline]
+    #[inline(always)]
     pub fn triangle(&self, i: u32) -> Option<[Vec3; 3]> {
         match self.triangles.get(i as usize) {
             Some(cached) => cached.get(),
-            None => match self.shapes.get(self.prims[i as usize].shape as usize) {
-                Some(Shape::Mesh(m)) => Some(m.vertices(self.prims[i as usize].index)),
-                Some(Shape::Sphere(_) | Shape::Disk(_)) | None => None,
-            },
+            None => self.mesh_triangle(i),
+        }
+    }
+
+    /// [`Self::triangle`] without the cache.
+    #[inline(never)]
+    fn mesh_triangle(&self, i: u32) -> Option<[Vec3; 3]> {
+        let r = self.prims[i as usize];
+        match self.shapes.get(r.shape as usize) {
+            Some(Shape::Mesh(m)) => Some(m.vertices(r.index)),
+            Some(Shape::Sphere(_) | Shape::Disk(_)) | None => None,
         }
     }
 
