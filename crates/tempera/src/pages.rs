@@ -31,15 +31,6 @@ enum Store<T> {
 }
 
 impl<T: Pod> PageVec<T> {
-    /// A table of `len` values, each `f(i)`.
-    pub fn from_fn(len: usize, mut f: impl FnMut(usize) -> T) -> Self {
-        let mut v = Self::zeroed(len);
-        for (i, x) in v.iter_mut().enumerate() {
-            *x = f(i);
-        }
-        v
-    }
-
     /// A copy of `values`.
     pub fn from_slice(values: &[T]) -> Self {
         let mut v = Self::zeroed(values.len());
@@ -139,7 +130,10 @@ mod tests {
     #[test]
     fn tables_keep_their_values_in_either_store() {
         for len in [0usize, 1, 1000, HUGE / 4 + 3] {
-            let v = PageVec::from_fn(len, |i| [i as u32, !(i as u32)]);
+            let mut v = PageVec::zeroed(len);
+            for (i, x) in v.iter_mut().enumerate() {
+                *x = [i as u32, !(i as u32)];
+            }
             assert_eq!(v.len(), len);
             assert_eq!(v.is_mapped(), cfg!(target_os = "linux") && len * 8 >= HUGE);
             if v.is_mapped() {

@@ -91,8 +91,8 @@ impl Bvh {
             (start, ranges.len() as u32 - start)
         });
         let mut packets = PageVec::zeroed(ranges.len());
-        packets.par_iter_mut().zip(ranges.par_iter()).for_each(|(packet, &(first, count))| {
-            Packet::fill(geometry, first, count, std::slice::from_mut(packet));
+        packets.par_iter_mut().zip(ranges.par_iter()).for_each(|(packet, &(first, n))| {
+            *packet = Packet::new(geometry, first, n);
         });
         Self { tree, packets }
     }

@@ -88,14 +88,16 @@ impl CachedTriangle {
     }
 }
 
-/// All shapes of a scene and the primitive table over them. Triangle vertices are also cached
-/// per primitive, in primitive order, so that intersection tests read one contiguous record.
+/// All shapes of a scene and the primitive table over them. For an accelerator that tests
+/// triangles through [`Geometry::intersect_prim`] (Embree's filter), triangle vertices can be
+/// cached per primitive, in primitive order, so that each test reads one contiguous record;
+/// the BVH keeps its own copy in its packets and needs no cache.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     pub shapes: Vec<Shape>,
     pub prims: Vec<PrimRef>,
-    /// Vertices of triangle primitives, aligned with `prims`; empty once an accelerator that
-    /// keeps its own copy (the BVH's packets) has taken over the triangle tests.
+    /// Vertices of triangle primitives, aligned with `prims`, once
+    /// [`Geometry::ensure_triangle_cache`] has built them; empty otherwise.
     triangles: PageVec<CachedTriangle>,
     /// Alpha (cut-out) texture per shape; empty when no shape has one.
     alpha: Vec<Option<Texture>>,
@@ -112,9 +114,7 @@ impl Geometry {
                 (0..shape.primitive_count() as u32).map(move |index| PrimRef { shape: s as u32, index })
             })
             .collect();
-        let mut g = Self { shapes, prims, ..Self::default() };
-        g.cache_triangles();
-        g
+        Self { shapes, prims, ..Self::default() }
     }
 
     fn cache_triangles(&mut self) {
@@ -128,13 +128,7 @@ impl Geometry {
         self.triangles = triangles;
     }
 
-    /// Frees the triangle cache: triangles are then read from their meshes when a test outside
-    /// the BVH's packets needs them.
-    pub fn drop_triangle_cache(&mut self) {
-        self.triangles = PageVec::default();
-    }
-
-    /// Rebuilds the triangle cache if it was dropped (for an accelerator that reads it).
+    /// Builds the triangle cache unless it is there (for an accelerator that reads it).
     pub fn ensure_triangle_cache(&mut self) {
         if self.triangles.len() != self.prims.len() {
             self.cache_triangles();
@@ -147,7 +141,7 @@ impl Geometry {
         self.prims.extend((0..instances.len() as u32).map(|k| PrimRef { shape: INSTANCE, index: first + k }));
         self.prototypes.extend(prototypes);
         self.instances.extend(instances);
-        self.cache_triangles();
+        self.triangles = PageVec::default();
     }
 
     /// The instance primitive `i` places, if it is one.
@@ -203,7 +197,7 @@ impl Geometry {
         }
     }
 
-    /// [`Self::triangle`] without the cache.
+    /// [`Self::triangle`] without the cache, from the mesh.
     #[inline(never)]
     fn mesh_triangle(&self, i: u32) -> Option<[Vec3; 3]> {
         let r = self.prims[i as usize];
@@ -244,25 +238,35 @@ impl Geometry {
     /// Intersects primitive `i`, returning the distance and hit parameters.
     #[inline]
     pub fn intersect_prim(&self, i: u32, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<PrimHit> {
-        let hit = match self.triangle(i) {
-            Some(tri) => intersect_triangle(ray, shear, tri, t_max).map(|h| (h.t, h.b)),
-            None => {
-                let r = self.prims[i as usize];
-                if r.shape == INSTANCE {
-                    let (inst, proto) = self.instance(i)?;
-                    return inst.intersect(proto, ray, t_max).map(|h| PrimHit { prim: i, ..h });
-                }
-                match &self.shapes[r.shape as usize] {
-                    Shape::Sphere(s) => s.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
-                    Shape::Disk(d) => d.intersect(ray, t_max).map(|t| (t, Vec3::ZERO)),
-                    Shape::Mesh(_) => None,
-                }
-            }
+        let Some(tri) = self.triangle(i) else {
+            return self.intersect_other(i, ray, t_max);
+        };
+        let h = intersect_triangle(ray, shear, tri, t_max)?;
+        self.keep(i, ray, h.t, h.b)
+    }
+
+    /// Intersects primitive `i`, which is not a triangle: an instance, a sphere or a disk.
+    pub fn intersect_other(&self, i: u32, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+        let r = self.prims[i as usize];
+        if r.shape == INSTANCE {
+            let (inst, proto) = self.instance(i)?;
+            return inst.intersect(proto, ray, t_max).map(|h| PrimHit { prim: i, ..h });
+        }
+        let t = match &self.shapes[r.shape as usize] {
+            Shape::Sphere(s) => s.intersect(ray, t_max),
+            Shape::Disk(d) => d.intersect(ray, t_max),
+            Shape::Mesh(_) => None,
         }?;
-        if !self.alpha.is_empty() && !self.alpha_keeps(i, ray, hit.0, hit.1) {
+        self.keep(i, ray, t, Vec3::ZERO)
+    }
+
+    /// The hit of primitive `i` at distance `t`, unless its alpha texture drops it.
+    #[inline(always)]
+    fn keep(&self, i: u32, ray: &Ray, t: f32, b: Vec3) -> Option<PrimHit> {
+        if !self.alpha.is_empty() && !self.alpha_keeps(i, ray, t, b) {
             return None;
         }
-        Some(PrimHit { prim: i, t: hit.0, b: hit.1, inner: 0 })
+        Some(PrimHit { prim: i, t, b, inner: 0 })
     }
 
     /// Surface data at a hit found by an accelerator.
@@ -357,11 +361,11 @@ impl Geometry {
         })
     }
 
-    /// Reorders the primitive table (the accelerator stores primitives in its own order). The
+    /// Reorders the primitive table (the accelerator stores primitives in its own order). A
     /// triangle cache is dropped, not reordered: the BVH, the one caller, keeps its own copy
     /// ([`Self::ensure_triangle_cache`] rebuilds it).
     pub fn reorder(&mut self, order: &[u32]) {
         self.prims = order.iter().map(|&i| self.prims[i as usize]).collect();
-        self.drop_triangle_cache();
+        self.triangles = PageVec::default();
     }
 }

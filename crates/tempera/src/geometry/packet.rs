@@ -7,10 +7,10 @@
 //! is the one the scalar loop would keep. A lane whose edge functions hit zero takes the scalar
 //! test (its double-precision fallback); a triangle with an alpha texture is kept or dropped by
 //! the texture as in [`Geometry::intersect_prim`], and lanes holding other primitives (spheres,
-//! disks, instances) go to it. The packets hold the only copy of the BVH's triangles in the
+//! disks, instances) go to [`Geometry::intersect_other`]. The packets hold the only copy of the BVH's triangles in the
 //! tree's order: the geometry's own triangle cache is freed once they are built.
 
-use super::triangle::{RayShear, intersect_triangle};
+use super::triangle::{RayShear, distance, intersect_triangle};
 use super::{Geometry, PrimHit, Ray};
 use crate::math::Vec3;
 
@@ -46,35 +46,27 @@ struct Lanes {
 }
 
 impl Packet {
-    /// How many packets hold `count` primitives.
-    pub fn count(count: u32) -> u32 {
-        count.div_ceil(LANES as u32)
-    }
-
-    /// Fills `out` (of [`Self::count`]`(count)` packets) with the primitives `first..first +
-    /// count` of `geometry`, in order.
-    pub fn fill(geometry: &Geometry, first: u32, count: u32, out: &mut [Packet]) {
-        for (k, packet) in out.iter_mut().enumerate() {
-            let start = first + (k * LANES) as u32;
-            let n = (first + count - start).min(LANES as u32);
-            *packet = Packet { p: [[[0.0; LANES]; 3]; 3], prim: [0; LANES], used: 0, tri: 0, alpha: 0, _pad: 0 };
-            for lane in 0..n as usize {
-                let prim = start + lane as u32;
-                packet.prim[lane] = prim;
-                packet.used |= 1 << lane;
-                if let Some(tri) = geometry.triangle(prim) {
-                    packet.tri |= 1 << lane;
-                    if geometry.has_alpha(prim) {
-                        packet.alpha |= 1 << lane;
-                    }
-                    for (v, p) in tri.iter().enumerate() {
-                        for a in 0..3 {
-                            packet.p[v][a][lane] = p[a];
-                        }
+    /// The packet of the `n` (at most [`LANES`]) primitives `first..first + n` of `geometry`.
+    pub fn new(geometry: &Geometry, first: u32, n: u32) -> Packet {
+        debug_assert!(n as usize <= LANES);
+        let mut packet = Packet { p: [[[0.0; LANES]; 3]; 3], prim: [0; LANES], used: 0, tri: 0, alpha: 0, _pad: 0 };
+        for lane in 0..n as usize {
+            let prim = first + lane as u32;
+            packet.prim[lane] = prim;
+            packet.used |= 1 << lane;
+            if let Some(tri) = geometry.triangle(prim) {
+                packet.tri |= 1 << lane;
+                if geometry.has_alpha(prim) {
+                    packet.alpha |= 1 << lane;
+                }
+                for (v, p) in tri.iter().enumerate() {
+                    for a in 0..3 {
+                        packet.p[v][a][lane] = p[a];
                     }
                 }
             }
         }
+        packet
     }
 
     /// The vertices of triangle lane `lane`.
@@ -117,28 +109,15 @@ impl Packet {
             det[i] = e[0][i] + e[1][i] + e[2][i];
             t_scaled[i] = e[0][i] * (z[0][i] * sz) + e[1][i] * (z[1][i] * sz) + e[2][i] * (z[2][i] * sz);
         }
-        let mask = |f: &dyn Fn(usize) -> bool| (0..LANES).fold(0u32, |m, i| m | (u32::from(f(i)) << i));
-        let zero = mask(&|i| e[0][i] == 0.0 || e[1][i] == 0.0 || e[2][i] == 0.0);
-        let neg = mask(&|i| e[0][i] < 0.0 || e[1][i] < 0.0 || e[2][i] < 0.0);
-        let pos = mask(&|i| e[0][i] > 0.0 || e[1][i] > 0.0 || e[2][i] > 0.0);
-        let flat = mask(&|i| det[i] == 0.0);
+        fn mask(f: impl Fn(usize) -> bool) -> u32 {
+            (0..LANES).fold(0, |m, i| m | (u32::from(f(i)) << i))
+        }
+        let zero = mask(|i| e[0][i] == 0.0 || e[1][i] == 0.0 || e[2][i] == 0.0);
+        let neg = mask(|i| e[0][i] < 0.0 || e[1][i] < 0.0 || e[2][i] < 0.0);
+        let pos = mask(|i| e[0][i] > 0.0 || e[1][i] > 0.0 || e[2][i] > 0.0);
+        let flat = mask(|i| det[i] == 0.0);
         let (exact, pass) = (zero, !zero & !(neg & pos) & !flat);
         Lanes { e, det, t_scaled, pass: pass & self.tri, exact: exact & self.tri }
-    }
-
-    /// Lane `i`'s hit within `t_max`, given that it passed the tests before the distance test.
-    #[inline(always)]
-    fn distance(l: &Lanes, i: usize, t_max: f32) -> Option<(f32, f32)> {
-        let (det, t_scaled) = (l.det[i], l.t_scaled[i]);
-        if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
-            return None;
-        }
-        if det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det) {
-            return None;
-        }
-        let inv_det = 1.0 / det;
-        let t = t_scaled * inv_det;
-        (t > 0.0 && t < t_max).then_some((t, inv_det))
     }
 
     /// Triangle lane `i`'s hit closer than `t_max`, alpha texture included.
@@ -155,7 +134,7 @@ impl Packet {
         let bit = 1 << i;
         let prim = self.prim[i];
         let hit = if l.pass & bit != 0 {
-            let (t, inv_det) = Self::distance(l, i, t_max)?;
+            let (t, inv_det) = distance(l.det[i], l.t_scaled[i], t_max)?;
             PrimHit { prim, t, b: Vec3::new(l.e[0][i], l.e[1][i], l.e[2][i]) * inv_det, inner: 0 }
         } else if l.exact & bit != 0 {
             let h = intersect_triangle(ray, shear, self.vertices(i), t_max)?;
@@ -181,7 +160,7 @@ impl Packet {
             let hit = if self.tri & (1 << i) != 0 {
                 self.triangle_hit(&l, i, geometry, ray, shear, t_max)
             } else {
-                geometry.intersect_prim(self.prim[i], ray, shear, t_max)
+                geometry.intersect_other(self.prim[i], ray, t_max)
             };
             if let Some(hit) = hit {
                 t_max = hit.t;
@@ -207,7 +186,7 @@ impl Packet {
         while lanes != 0 {
             let i = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
-            if geometry.intersect_prim(self.prim[i], ray, shear, t_max).is_some() {
+            if geometry.intersect_other(self.prim[i], ray, t_max).is_some() {
                 return true;
             }
         }
@@ -284,8 +263,8 @@ mod tests {
         let mut g = Geometry::new(shapes);
         g.set_alpha(g.shapes.len() - 1, 0.5.into());
         let n = g.prims.len() as u32;
-        let mut packets = vec![bytemuck::Zeroable::zeroed(); Packet::count(n) as usize];
-        Packet::fill(&g, 0, n, &mut packets);
+        let packets: Vec<Packet> =
+            (0..n).step_by(LANES).map(|first| Packet::new(&g, first, (n - first).min(LANES as u32))).collect();
         assert!(packets.iter().any(|p| p.tri != p.used), "no lane of another primitive");
         assert!(packets.iter().any(|p| p.alpha != 0), "no cut-out lane");
         let mut hits = 0;

@@ -81,6 +81,15 @@ pub fn intersect_triangle(ray: &Ray, shear: &RayShear, p: [Vec3; 3], t_max: f32)
     }
     let z = [q[0].z * sz, q[1].z * sz, q[2].z * sz];
     let t_scaled = e0 * z[0] + e1 * z[1] + e2 * z[2];
+    let (t, inv_det) = distance(det, t_scaled, t_max)?;
+    Some(TriangleHit { t, b: Vec3::new(e0, e1, e2) * inv_det })
+}
+
+/// The last step of the test, the only one that depends on `t_max`: from the determinant
+/// `det` (non-zero) and the scaled distance `t_scaled`, the hit distance and `1 / det` when
+/// `0 < t < t_max`.
+#[inline(always)]
+pub(super) fn distance(det: f32, t_scaled: f32, t_max: f32) -> Option<(f32, f32)> {
     if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
         return None;
     }
@@ -89,10 +98,7 @@ pub fn intersect_triangle(ray: &Ray, shear: &RayShear, p: [Vec3; 3], t_max: f32)
     }
     let inv_det = 1.0 / det;
     let t = t_scaled * inv_det;
-    if !(t > 0.0 && t < t_max) {
-        return None;
-    }
-    Some(TriangleHit { t, b: Vec3::new(e0, e1, e2) * inv_det })
+    (t > 0.0 && t < t_max).then_some((t, inv_det))
 }
 
 #[cfg(test)]
