@@ -114,6 +114,10 @@ pub struct IntegratorFlags {
     /// replica 0, --large-step).
     #[arg(long)]
     pub hot_large_step: Option<f32>,
+    /// Tempered MMLT with --swap mixture: the weight of the hotter targets in the chains'
+    /// mixture target (default 1: every target's share equal).
+    #[arg(long)]
+    pub hot_weight: Option<f64>,
     /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly (five replicas at every depth, a
     /// roughness-only ladder tuned for 0.234, replica 0 alone writes the image).
     #[arg(long)]
@@ -168,6 +172,7 @@ impl IntegratorFlags {
             swap_every: self.swap_every,
             hot_every: self.hot_every,
             hot_large_step: self.hot_large_step,
+            hot_weight: self.hot_weight,
             paper: self.paper.then_some(true),
             photons: self.photons,
             radius: self.radius,

@@ -73,6 +73,10 @@ pub enum Swap {
     Neighbor,
     EquiEnergy,
     Permutation,
+    /// No swaps: one chain per ensemble whose target is the mixture `Σ_l f_l/ρ_l` of the
+    /// replicas' normalised targets (serial tempering with the temperature summed out), at
+    /// the cost of one chain ([`crate::integrator::tempered::mixture`]).
+    Mixture,
 }
 
 /// Which densities the MIS weights inside tempered targets use.
@@ -222,6 +226,10 @@ pub struct IntegratorSettings {
     /// Tempered MMLT: the large-step probability of the replicas above replica 0.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hot_large_step: Option<f32>,
+    /// Tempered MMLT with `swap = mixture`: the weight `w` of the hotter targets in the
+    /// mixture `f_0 + w Σ_{l ≥ 1} f_l/ρ_l`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hot_weight: Option<f64>,
     /// Tempered MMLT: the setup of Šik & Křivánek 2016 exactly — five replicas at every depth,
     /// a roughness-only ladder tuned for a neighbour acceptance of 0.234, replica 0 alone
     /// writing the image (the swap strategy stays free).
@@ -291,6 +299,7 @@ impl IntegratorSettings {
             ("swap_every", self.swap_every.is_some(), tempered),
             ("hot_every", self.hot_every.is_some(), tempered),
             ("hot_large_step", self.hot_large_step.is_some(), tempered),
+            ("hot_weight", self.hot_weight.is_some(), tempered),
             ("paper", self.paper.is_some(), tempered),
             ("photons", self.photons.is_some(), kind == Sppm),
             ("radius", self.radius.is_some(), kind == Sppm),
@@ -330,6 +339,7 @@ impl IntegratorSettings {
         check_range("independent_below", self.independent_below, 0..=100_000_000)?;
         check_probability("large_step", self.large_step.map(f64::from))?;
         check_probability("hot_large_step", self.hot_large_step.map(f64::from))?;
+        check_probability("hot_weight", self.hot_weight)?;
         check_range("replicas", self.replicas, 1..=32)?;
         check_range("burn_in", self.burn_in, 1..=10_000_000)?;
         if self.burn_in.is_some() && self.tuning.is_some_and(|t| t != LadderTuning::BurnIn) {
@@ -379,6 +389,12 @@ impl IntegratorSettings {
                 "the permutation swap enumerates all K! permutations: use at most {} replicas",
                 Permutation::MAX_REPLICAS
             ));
+        }
+        if self.hot_weight.is_some() && self.swap != Some(Swap::Mixture) {
+            return Err("hot_weight weighs the hotter targets of the mixture: it needs swap = mixture".into());
+        }
+        if self.swap == Some(Swap::Mixture) && self.reuse_replicas == Some(false) {
+            return Err("the mixture target reuses every replica by construction: drop --no-reuse-replicas".into());
         }
         Ok(())
     }
@@ -455,6 +471,7 @@ pub fn create(
                 swap_every: s.swap_every.unwrap_or(m.swap_every),
                 hot_every: s.hot_every.unwrap_or(m.hot_every),
                 hot_large_step: s.hot_large_step.or(m.hot_large_step),
+                hot_weight: s.hot_weight.unwrap_or(m.hot_weight),
                 depth_images: s.depth_images,
                 ..m
             })

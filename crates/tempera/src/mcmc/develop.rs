@@ -34,7 +34,7 @@ pub(super) fn local_reports<W: Walker>(
     plan: &[Slot],
     groups: &[Option<Group<Option<W::Group>>>],
 ) -> Vec<Report> {
-    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.splats.len());
+    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.shared.valued());
     let chains = walkers.iter().zip(plan).map(|(walker, slot)| Report::of(walker, layers(slot.group)));
     let others = independents.iter().map(|walker| Report {
         stats: walker.stats.clone(),
@@ -103,7 +103,7 @@ pub(super) fn develop<L: Layers>(
     group_images: bool,
 ) -> RenderOutput {
     let pixels = u64::from(w) * u64::from(h);
-    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.splats.len());
+    let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.shared.valued());
     let mut stats: Vec<DepthStats> =
         (0..boots.len()).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect();
     let mut large: Vec<Vec<Moments>> = (0..boots.len()).map(|k| vec![Moments::default(); layers(k)]).collect();
@@ -153,6 +153,13 @@ pub(super) fn develop<L: Layers>(
         let mut layer_b = Vec::with_capacity(group.splats.len());
         for (l, buffer) in buffers.iter().enumerate() {
             let (b, ratio) = match (l, group.shared.layer(l)) {
+                // A mixture chain's layer: b_m = b_0 + Σ_{l ≥ 1} b_l/ρ_l.
+                (0, _) if group.shared.mixture() => {
+                    let hot = (1..group.shared.valued()).filter_map(|m| {
+                        group.shared.layer(m).map(|(moments, ratio)| refine(moments, &large[k][m]).0 / ratio)
+                    });
+                    (d.b + hot.sum::<f64>(), 1.0)
+                }
                 (0, _) => (d.b, 1.0),
                 (_, Some((moments, ratio))) => (refine(moments, &large[k][l]).0, ratio),
                 (_, None) => continue,

@@ -69,6 +69,17 @@ pub trait Layers: Send + Sync {
     fn ratios(&self) -> &[f64] {
         &[]
     }
+    /// Whether the group's single layer is splatted by chains on the mixture `Σ_l f_l/ρ_l` of
+    /// targets `0 … valued − 1` (their moments and ratios from [`Self::layer`]): it is then
+    /// normalised by `b_m = Σ_l b_l/ρ_l` instead of `b_0`.
+    fn mixture(&self) -> bool {
+        false
+    }
+    /// The targets whose moments over the large steps the walkers report ([`Walker::large`]):
+    /// one per layer, or each target of the mixture.
+    fn valued(&self) -> usize {
+        self.count()
+    }
 }
 
 /// A group with a single layer: MMLT's and PSSMLT's.
@@ -88,6 +99,12 @@ impl<L: Layers> Layers for Option<L> {
     }
     fn ratios(&self) -> &[f64] {
         self.as_ref().map_or(&[], Layers::ratios)
+    }
+    fn mixture(&self) -> bool {
+        self.as_ref().is_some_and(Layers::mixture)
+    }
+    fn valued(&self) -> usize {
+        self.as_ref().map_or(1, Layers::valued)
     }
 }
 

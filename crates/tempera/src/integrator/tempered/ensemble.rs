@@ -14,6 +14,7 @@
 
 use super::calibration::Calibration;
 use super::ladder::{Tuning, TuningMethod, candidate_temperatures, ladder_from_bootstrap, tune_together};
+use super::mixture::{self, MixtureTarget};
 use super::replicas::Replicas;
 use super::reuse::Reuse;
 use super::{SwapKernel, swap_acceptance};
@@ -57,6 +58,9 @@ pub struct EnsembleSettings {
     /// Sweeps of the pilot that decides whether the depth's ensembles pay for their replicas
     /// ([`ensembles_pay`]; 0: no pilot, ensembles everywhere).
     pub pilot: u64,
+    /// One chain on the mixture of the replicas' targets instead of a chain per replica
+    /// ([`super::mixture`]; implies reuse), with the hotter targets' weight.
+    pub mixture: Option<f64>,
 }
 
 pub struct Ensemble<'a> {
@@ -80,11 +84,21 @@ pub struct Ensemble<'a> {
 #[derive(Clone, Debug, Default)]
 pub struct EnsembleGroup {
     pub reuse: Option<Reuse>,
+    /// The ensembles' main chains sample the mixture of the targets ([`super::mixture`]).
+    pub mixture: bool,
 }
 
 impl Layers for EnsembleGroup {
     fn count(&self) -> usize {
+        if self.mixture { 1 } else { self.valued() }
+    }
+
+    fn valued(&self) -> usize {
         self.reuse.as_ref().map_or(1, |r| r.ratios.len())
+    }
+
+    fn mixture(&self) -> bool {
+        self.mixture && self.reuse.is_some()
     }
 
     fn layer(&self, l: usize) -> Option<(Moments, f64)> {
@@ -153,6 +167,15 @@ impl<'a> Ensemble<'a> {
             let fresh = group.start_chain(&self.replicas.targets[j], start, u, Pcg32::new(seed, j as u64));
             self.replicas.chains[j].restart(fresh);
         }
+    }
+
+    /// Restarts replica 0 alone from the depth's bootstrap as `start` (a distribution over its
+    /// samples) picks, under `target`.
+    fn restart_main(&mut self, target: &MixtureTarget, start: &Distribution1D, group: &GroupContext) {
+        let u = self.rng.next_f32();
+        let seed = (u64::from(self.rng.next_u32()) << 32) | u64::from(self.rng.next_u32());
+        let fresh = group.start_chain(target, start, u, Pcg32::new(seed, 0));
+        self.replicas.chains[0].restart(fresh);
     }
 
     /// Keeps replica 0 alone, as a plain MMLT chain (statistics start afresh).
@@ -233,6 +256,13 @@ impl Walker for Ensemble<'_> {
     type Group = EnsembleGroup;
 
     fn run(&mut self, group: &EnsembleGroup, mutations: u64, splats: &[SharedSplats], stop: &dyn Fn() -> bool) -> u64 {
+        if group.mixture
+            && let Some(reuse) = &group.reuse
+        {
+            let Replicas { chains, targets } = &mut self.replicas;
+            let target = MixtureTarget { targets, ratios: &reuse.ratios };
+            return mixture::run(&mut chains[0], &target, &mut self.large, mutations, &splats[0], stop);
+        }
         if self.replicas.len() == 1 {
             return self.replicas.chains[0].run(&self.replicas.targets[0], mutations, Some(&splats[0]), stop);
         }
@@ -268,7 +298,8 @@ impl Walker for Ensemble<'_> {
         let mut stats = self.replicas.chains[0].stats.clone();
         stats.ladder = self.replicas.ladder();
         stats.ladder_ensembles = 1;
-        stats.swaps = (self.replicas.len() > 1).then(|| self.swaps.clone());
+        // A mixture chain does not swap.
+        stats.swaps = (self.replicas.len() > 1 && self.settings.mixture.is_none()).then(|| self.swaps.clone());
         stats
     }
 
@@ -342,6 +373,24 @@ impl Walker for Ensemble<'_> {
             }
             None => Calibration::new(&ensembles[0].replicas.targets, group, samples),
         };
+        if let Some(weight) = ensembles[0].settings.mixture {
+            // The main chains alone mutate, on the mixture: they restart in proportion to it.
+            // A weight w of the hotter targets is a ratio ρ_l/w (any ratio keeps the estimate
+            // unbiased).
+            let mut reuse = Reuse::new(&calibration, k);
+            for rho in reuse.ratios.iter_mut().skip(1) {
+                *rho /= weight;
+            }
+            let targets = &ensembles[0].replicas.targets.clone();
+            let target = MixtureTarget { targets, ratios: &reuse.ratios };
+            let values = target.values(&calibration.values);
+            if values.iter().any(|&v| v > 0.0) {
+                let start = Distribution1D::new(&values);
+                ensembles.par_iter_mut().for_each(|e| e.restart_main(&target, &start, group));
+            }
+            ensembles.par_iter_mut().for_each(|e| e.discard_statistics());
+            return (EnsembleGroup { reuse: Some(reuse), mixture: true }, rays);
+        }
         let starts: Vec<Option<Distribution1D>> = (0..k)
             .map(|l| {
                 let values = calibration.of(l);
@@ -353,7 +402,7 @@ impl Walker for Ensemble<'_> {
             e.restart(&starts, group);
             e.discard_statistics();
         });
-        let shared = EnsembleGroup { reuse };
+        let shared = EnsembleGroup { reuse, mixture: false };
         let values = calibration.of(0);
         let b0 = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len().max(1) as f64;
         if ensembles_pay(ensembles, &shared, b0, group, stop) == Some(false) {

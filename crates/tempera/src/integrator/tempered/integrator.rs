@@ -67,6 +67,9 @@ pub struct TemperedIntegrator {
     pub hot_every: u64,
     /// Large-step probability of replicas `1 … K−1` (`None`: [`Self::large_step_probability`]).
     pub hot_large_step: Option<f32>,
+    /// With [`Swap::Mixture`], the weight `w` of the hotter targets in the mixture
+    /// `f_0 + w Σ_{l ≥ 1} f_l/ρ_l` (1: every target's share equal).
+    pub hot_weight: f64,
     /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
     /// image.
     pub depth_images: bool,
@@ -108,6 +111,7 @@ impl TemperedIntegrator {
             swap_every: 1,
             hot_every: 1,
             hot_large_step: None,
+            hot_weight: 1.0,
             depth_images: false,
             independent_below: 0,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
@@ -176,6 +180,7 @@ impl TemperedIntegrator {
             collapse_above: self.collapse_above,
             collapse_below: self.collapse_below,
             pilot: self.pilot,
+            mixture: (self.swap == Swap::Mixture).then_some(self.hot_weight),
         }
     }
 
@@ -185,7 +190,8 @@ impl TemperedIntegrator {
         let (k, c, seed) = (cx.group.k, cx.c, cx.group.seed);
         let ladder: &[f32] = if k == 0 { &ladder[..1] } else { ladder };
         let kernel = match self.swap {
-            Swap::Neighbor => SwapKernel::Neighbor(Neighbor),
+            // The mixture's chains never swap.
+            Swap::Neighbor | Swap::Mixture => SwapKernel::Neighbor(Neighbor),
             Swap::EquiEnergy => SwapKernel::EquiEnergy(EquiEnergy::from_samples(cx.bootstrap, RINGS)),
             Swap::Permutation => SwapKernel::Permutation(Permutation::new(ladder.len())),
         };
@@ -237,7 +243,7 @@ impl Integrator for TemperedIntegrator {
 
     fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {
         use crate::integrator::memory::{SHARED_SPLAT_BYTES, pixels};
-        let layers = if self.reuse_replicas { self.replicas.max(1) } else { 1 } as u64;
+        let layers = if self.reuse_replicas && self.swap != Swap::Mixture { self.replicas.max(1) } else { 1 } as u64;
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
         pixels(scene).saturating_mul(12 + images + (u64::from(self.max_depth) + 1) * layers * SHARED_SPLAT_BYTES)
     }

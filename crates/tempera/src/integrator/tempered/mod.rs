@@ -13,12 +13,16 @@
 //!   occupancy, and thereby the proposal probability, unchanged;
 //! - [`Permutation`]: a Gibbs step over all `K!` assignments of states to replicas, drawn with
 //!   probability proportional to `Π_i f_i(u_σ(i))` (always accepted).
+//!
+//! Or, without swaps, [`mixture`]: one chain per ensemble on the mixture of the replicas'
+//! normalised targets.
 
 mod calibration;
 mod ensemble;
 mod equi_energy;
 mod integrator;
 mod ladder;
+pub mod mixture;
 mod neighbor;
 mod permutation;
 mod replicas;

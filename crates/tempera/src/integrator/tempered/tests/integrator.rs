@@ -88,7 +88,7 @@ fn default_scene_and_bdpt() -> (crate::scene::Scene, RenderOutput) {
 
 /// `image` agrees with the BDPT render: image means within 3 %, 2×2 blocks within four
 /// standard errors (plus 10 %).
-fn assert_agrees(name: &str, image: &crate::texture::Image, bdpt: &crate::texture::Image) {
+pub(super) fn assert_agrees(name: &str, image: &crate::texture::Image, bdpt: &crate::texture::Image) {
     let mean =
         |img: &crate::texture::Image| img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64;
     let ratio = mean(image) / mean(bdpt);

@@ -349,3 +349,5 @@ mod start {
 }
 
 mod tuning;
+
+mod mixture;
