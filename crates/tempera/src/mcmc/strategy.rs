@@ -112,7 +112,7 @@ impl Evaluated {
         if !valid_radiance(l) || !f.is_finite() {
             return Contribution { invalid: true, ..zero };
         }
-        let raster = match (self.t, self.connection.and_then(|c| c.raster)) {
+        let raster = match (self.t, self.connection.as_ref().and_then(|c| c.raster)) {
             (1, Some(r)) => r,
             _ => self.raster,
         };

@@ -135,7 +135,8 @@ impl<'a> TemperedTarget<'a> {
         if self.temper.a <= 0.0 {
             return state.contribution.f;
         }
-        let Some(e) = state.evaluated else { return 0.0 };
+        // By reference: an evaluated state holds its connection's sampled vertex.
+        let Some(e) = &state.evaluated else { return 0.0 };
         let Some(c) = &e.connection else { return 0.0 };
         let (l, w) = tempered(self.scene, state.paths.subpaths(), (e.s, e.t), c, &self.temper, &mut state.scratch);
         // An invalid value has a zero contribution.
