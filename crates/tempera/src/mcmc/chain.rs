@@ -146,13 +146,25 @@ impl<S: State> Chain<S> {
         splats: Option<&SharedSplats>,
         stop: &dyn Fn() -> bool,
     ) -> u64 {
+        self.run_observed(target, mutations, splats, stop, |_| {})
+    }
+
+    /// [`Self::run`], showing each large-step proposal to `observe` ([`Self::mutate_observed`]).
+    pub fn run_observed(
+        &mut self,
+        target: &impl Target<State = S>,
+        mutations: u64,
+        splats: Option<&SharedSplats>,
+        stop: &dyn Fn() -> bool,
+        mut observe: impl FnMut(&mut S),
+    ) -> u64 {
         let start = std::time::Instant::now();
         let mut done = 0;
         while done < mutations {
             if done % 256 == 0 && stop() {
                 break;
             }
-            self.mutate(target, splats);
+            self.mutate_observed(target, splats, &mut observe);
             done += 1;
         }
         self.stats.seconds += start.elapsed().as_secs_f64();

@@ -14,7 +14,7 @@
 
 use super::calibration::Calibration;
 use super::ladder::{Tuning, TuningMethod, candidate_temperatures, ladder_from_bootstrap, tune_together};
-use super::mixture::{self, MixtureTarget};
+use super::mixture::MixtureTarget;
 use super::replicas::Replicas;
 use super::reuse::Reuse;
 use super::{SwapKernel, swap_acceptance};
@@ -23,7 +23,7 @@ use crate::integrator::ReplicaSplats;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
 use crate::mcmc::{
-    Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, TemperedState, TemperedTarget, Walker,
+    Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, Target, TemperedState, TemperedTarget, Walker,
     target_value,
 };
 use rayon::prelude::*;
@@ -98,7 +98,7 @@ impl Layers for EnsembleGroup {
     }
 
     fn mixture(&self) -> bool {
-        self.mixture && self.reuse.is_some()
+        self.mixture
     }
 
     fn layer(&self, l: usize) -> Option<(Moments, f64)> {
@@ -162,20 +162,24 @@ impl<'a> Ensemble<'a> {
     fn restart(&mut self, starts: &[Option<Distribution1D>], group: &GroupContext) {
         for (j, start) in starts.iter().enumerate() {
             let Some(start) = start else { continue };
-            let u = self.rng.next_f32();
-            let seed = (u64::from(self.rng.next_u32()) << 32) | u64::from(self.rng.next_u32());
-            let fresh = group.start_chain(&self.replicas.targets[j], start, u, Pcg32::new(seed, j as u64));
-            self.replicas.chains[j].restart(fresh);
+            let target = self.replicas.targets[j];
+            self.restart_replica(j, &target, start, group);
         }
     }
 
-    /// Restarts replica 0 alone from the depth's bootstrap as `start` (a distribution over its
-    /// samples) picks, under `target`.
-    fn restart_main(&mut self, target: &MixtureTarget, start: &Distribution1D, group: &GroupContext) {
+    /// Restarts replica `j` under `target` from the depth's bootstrap sample that `start` (a
+    /// distribution over the samples) picks with the ensemble's random numbers.
+    fn restart_replica(
+        &mut self,
+        j: usize,
+        target: &impl Target<State = TemperedState>,
+        start: &Distribution1D,
+        group: &GroupContext,
+    ) {
         let u = self.rng.next_f32();
         let seed = (u64::from(self.rng.next_u32()) << 32) | u64::from(self.rng.next_u32());
-        let fresh = group.start_chain(target, start, u, Pcg32::new(seed, 0));
-        self.replicas.chains[0].restart(fresh);
+        let fresh = group.start_chain(target, start, u, Pcg32::new(seed, j as u64));
+        self.replicas.chains[j].restart(fresh);
     }
 
     /// Keeps replica 0 alone, as a plain MMLT chain (statistics start afresh).
@@ -259,9 +263,16 @@ impl Walker for Ensemble<'_> {
         if group.mixture
             && let Some(reuse) = &group.reuse
         {
+            // Each large-step proposal valued under every target, for their b_l.
             let Replicas { chains, targets } = &mut self.replicas;
-            let target = MixtureTarget { targets, ratios: &reuse.ratios };
-            return mixture::run(&mut chains[0], &target, &mut self.large, mutations, &splats[0], stop);
+            let target = MixtureTarget { targets, reuse };
+            let large = &mut self.large;
+            let observe = |proposal: &mut TemperedState| {
+                for (l, m) in large.iter_mut().enumerate() {
+                    m.push(f64::from(target_value(proposal.value_under(l, targets))));
+                }
+            };
+            return chains[0].run_observed(&target, mutations, Some(&splats[0]), stop, observe);
         }
         if self.replicas.len() == 1 {
             return self.replicas.chains[0].run(&self.replicas.targets[0], mutations, Some(&splats[0]), stop);
@@ -382,11 +393,11 @@ impl Walker for Ensemble<'_> {
                 *rho /= weight;
             }
             let targets = &ensembles[0].replicas.targets.clone();
-            let target = MixtureTarget { targets, ratios: &reuse.ratios };
+            let target = MixtureTarget { targets, reuse: &reuse };
             let values = target.values(&calibration.values);
             if values.iter().any(|&v| v > 0.0) {
                 let start = Distribution1D::new(&values);
-                ensembles.par_iter_mut().for_each(|e| e.restart_main(&target, &start, group));
+                ensembles.par_iter_mut().for_each(|e| e.restart_replica(0, &target, &start, group));
             }
             ensembles.par_iter_mut().for_each(|e| e.discard_statistics());
             return (EnsembleGroup { reuse: Some(reuse), mixture: true }, rays);

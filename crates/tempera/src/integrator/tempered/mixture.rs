@@ -12,7 +12,8 @@
 //! subpaths and connection (no rays).
 //!
 //! The chain's states follow `m/b_m`, `b_m = ∫ m = Σ_l b_l/ρ_l`, so splatting `C_0/m` (its
-//! untempered contribution over its mixture value) with MMLT's expected-value weights and
+//! untempered contribution over its mixture value, as any [`crate::mcmc::Chain`] on the target
+//! `m` splats) with MMLT's expected-value weights and
 //! scaling the depth's splats by `N_pixels · b_m / M` estimates the depth's image, for any
 //! fixed `ρ` (a good one only lowers the variance). The chain driver ([`crate::mcmc::develop`])
 //! computes `b_m` from the low-variance `b_0` and each `b_l`, refined like reuse's with the
@@ -21,87 +22,43 @@
 //! flattened targets carry light the real scene does not, the chain spends part of its time
 //! there, splatting little.
 
-use crate::film::SharedSplats;
-use crate::mcmc::{
-    Chain, EvalContext, Moments, NormaliserMoments, State, Target, TemperedState, TemperedTarget, target_value,
-};
+use super::Reuse;
+use crate::mcmc::{EvalContext, NormaliserMoments, Target, TemperedState, TemperedTarget};
 
-/// The mixture `Σ_l f_l/ρ_l` of a depth's tempered targets.
+/// The mixture `Σ_l f_l/ρ_l` of a depth's tempered targets, with the ratios of `reuse`.
 #[derive(Clone, Copy)]
 pub struct MixtureTarget<'t, 'a> {
     pub targets: &'t [TemperedTarget<'a>],
-    pub ratios: &'t [f64],
+    pub reuse: &'t Reuse,
 }
 
 impl MixtureTarget<'_, '_> {
-    /// The mixture value of `state` (evaluated under the main target), from its cached
-    /// cross-evaluations.
-    pub fn value_of(&self, state: &mut TemperedState) -> f32 {
-        let mut sum = 0.0f64;
-        for (l, rho) in self.ratios.iter().enumerate().take(self.targets.len()) {
-            sum += f64::from(target_value(state.value_under(l, self.targets))) / rho;
-        }
-        if sum.is_finite() { sum as f32 } else { 0.0 }
-    }
-
     /// The mixture values of bootstrap samples valued under every target (`values[i][l]`).
     pub fn values(&self, values: &[Vec<f32>]) -> Vec<f32> {
         values
             .iter()
-            .map(|v| {
-                let sum: f64 = v.iter().zip(self.ratios).map(|(&f, rho)| f64::from(f) / rho).sum();
-                if sum.is_finite() { sum as f32 } else { 0.0 }
-            })
+            .map(|v| finite(v.iter().zip(&self.reuse.ratios).map(|(&f, rho)| f64::from(f) / rho).sum()))
             .collect()
     }
+}
+
+/// A mixture value as a target value: 0 where the sum overflowed.
+fn finite(sum: f64) -> f32 {
+    if sum.is_finite() { sum as f32 } else { 0.0 }
 }
 
 impl Target for MixtureTarget<'_, '_> {
     type State = TemperedState;
 
-    /// Traces the state under the main target, then values it under the mixture. Its
-    /// contribution stays the untempered one.
+    /// Traces the state under the main target, then values it under the mixture (from its
+    /// cached cross-evaluations). Its contribution stays the untempered one.
     fn evaluate(&self, cx: &mut EvalContext, recycled: TemperedState) -> TemperedState {
         let mut state = self.targets[0].evaluate(cx, recycled);
-        state.value = self.value_of(&mut state);
+        state.value = finite(self.reuse.mixture(self.targets, &mut state));
         state
     }
 
     fn normaliser(&self, seed: u64, samples: usize) -> Option<(NormaliserMoments, u64)> {
         self.targets[0].normaliser(seed, samples)
     }
-}
-
-/// Makes up to `mutations` mutations of `chain` on the mixture, checking `stop` every 256;
-/// each large-step proposal is valued under every target into `large`, the rest splats
-/// `C_0/m` with its expected weight into `splats`. Returns the mutations made; the time
-/// spent is added to the chain's statistics.
-pub fn run(
-    chain: &mut Chain<TemperedState>,
-    target: &MixtureTarget,
-    large: &mut [Moments],
-    mutations: u64,
-    splats: &SharedSplats,
-    stop: &dyn Fn() -> bool,
-) -> u64 {
-    let start = std::time::Instant::now();
-    let mut done = 0;
-    while done < mutations {
-        if done % 256 == 0 && stop() {
-            break;
-        }
-        let observe = |proposal: &mut TemperedState| {
-            for (l, m) in large.iter_mut().enumerate() {
-                m.push(f64::from(target_value(proposal.value_under(l, target.targets))));
-            }
-        };
-        chain.mutate_splatting(target, observe, |state, weight| {
-            if weight > 0.0 && state.value() > 0.0 {
-                state.splat(splats, weight / state.value());
-            }
-        });
-        done += 1;
-    }
-    chain.stats.seconds += start.elapsed().as_secs_f64();
-    done
 }

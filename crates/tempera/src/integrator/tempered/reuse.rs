@@ -65,10 +65,17 @@ impl Reuse {
     /// values are cached in the state (the ladder is frozen by now), so a state that stays
     /// (a rejected proposal) or moves to another replica is not evaluated again.
     pub fn scale(&self, targets: &[TemperedTarget], state: &mut TemperedState) -> f32 {
+        let sum = self.mixture(targets, state);
+        if sum > 0.0 && sum.is_finite() { (1.0 / sum) as f32 } else { 0.0 }
+    }
+
+    /// `Σ_l f_l(u)/ρ_l` at `state`: the balance heuristic's denominator, and the target of a
+    /// mixture chain ([`super::mixture`]).
+    pub fn mixture(&self, targets: &[TemperedTarget], state: &mut TemperedState) -> f64 {
         let mut sum = 0.0f64;
         for (l, rho) in self.ratios.iter().enumerate().take(targets.len()) {
             sum += f64::from(state.value_under(l, targets)) / rho;
         }
-        if sum > 0.0 && sum.is_finite() { (1.0 / sum) as f32 } else { 0.0 }
+        sum
     }
 }
