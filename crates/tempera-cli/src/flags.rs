@@ -43,6 +43,11 @@ pub struct IntegratorFlags {
     /// evenly over the depths (default 0.1; 0: the bootstrap's samples alone)
     #[arg(long, value_name = "SHARE")]
     pub normaliser_share: Option<f64>,
+    /// MMLT: clamp each depth's target at F times the mean of its bootstrap's non-zero values;
+    /// a clamped state splats its whole contribution, so a rare very bright path weighs on its
+    /// own pixels instead of on its depth's normalisation (default 0: never)
+    #[arg(long, value_name = "F")]
+    pub target_clamp: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long)]
     pub replicas: Option<usize>,
@@ -151,6 +156,7 @@ impl IntegratorFlags {
             allocation: self.allocation,
             independent_below: self.independent_below,
             normaliser_share: self.normaliser_share,
+            target_clamp: self.target_clamp,
             replicas: self.replicas,
             swap: self.swap,
             ladder: self.ladder.clone(),

@@ -162,21 +162,26 @@ pub fn chi2_directions(
 /// (the bootstrap's samplers, seeded by `seed`): the plain estimate of `b_k` that lower-variance
 /// normalisers are held to.
 pub fn mmlt_target_moments(scene: &crate::scene::Scene, k: usize, seed: u64, n: usize) -> crate::mcmc::Moments {
-    use crate::mcmc::{ChainSettings, EvalContext, Moments, evaluate, sampler_for};
+    let mut moments = crate::mcmc::Moments::default();
+    for v in mmlt_target_values(scene, k, seed, n) {
+        moments.push(v);
+    }
+    moments
+}
+
+/// The values of MMLT's depth-`k` target at `n` independent uniform samples (the bootstrap's
+/// samples of seed `seed`).
+pub fn mmlt_target_values(scene: &crate::scene::Scene, k: usize, seed: u64, n: usize) -> Vec<f64> {
+    use crate::mcmc::{ChainSettings, EvalContext, evaluate, sampler_for};
     use rayon::prelude::*;
     let settings = ChainSettings::new(0, 0, 0.01, 0.3);
-    let values: Vec<f64> = (0..n)
+    (0..n)
         .into_par_iter()
         .map(|i| {
             let mut cx = EvalContext::new(sampler_for(seed, k, i, &settings));
             f64::from(evaluate(scene, k, &mut cx).f)
         })
-        .collect();
-    let mut moments = Moments::default();
-    for v in values {
-        moments.push(v);
-    }
-    moments
+        .collect()
 }
 
 /// Asserts that two independent estimates of one mean agree within four combined standard

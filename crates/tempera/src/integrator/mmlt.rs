@@ -29,6 +29,10 @@ pub struct MmltIntegrator {
     /// The share of the chains' rays spent on further samples of the depths' normalisers as
     /// the render goes on ([`crate::mcmc::normaliser`]; 0: the bootstrap's alone).
     pub normaliser_share: f64,
+    /// Clamps each depth's target (`k ≥ 1`) at this many times the mean of its bootstrap's
+    /// non-zero values, splatting a clamped state's whole contribution over the clamped value
+    /// ([`crate::mcmc::Chain::start_clamped`]); 0 (the default, MMLT as published): never.
+    pub target_clamp: f64,
 }
 
 impl MmltIntegrator {
@@ -43,6 +47,7 @@ impl MmltIntegrator {
             depth_images: false,
             independent_below: 0,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
+            target_clamp: 0.0,
         }
     }
 }
@@ -62,8 +67,13 @@ impl Target for DepthTarget<'_> {
 
     /// Depth 0 (emitters seen directly) from points on the emitters connected to the camera,
     /// deeper paths from every strategy of their depth at once.
-    fn normaliser(&self, seed: u64, samples: usize) -> Option<(NormaliserMoments, u64)> {
-        depth_normaliser(self.scene, self.depth, seed, samples)
+    fn normaliser(&self, seed: u64, samples: usize, clamp: f32) -> Option<(NormaliserMoments, u64)> {
+        depth_normaliser(self.scene, self.depth, seed, samples, clamp)
+    }
+
+    /// Depths `k ≥ 1`, whose all-strategy normaliser can value the clamped target.
+    fn clampable(&self) -> bool {
+        self.depth >= 1
     }
 
     fn independent_depth(&self) -> Option<usize> {
@@ -93,7 +103,8 @@ impl Integrator for MmltIntegrator {
             .with_spread_allocation(self.spread_allocation)
             .with_group_images(self.depth_images)
             .with_independent_below(self.independent_below)
-            .with_normaliser_share(self.normaliser_share);
+            .with_normaliser_share(self.normaliser_share)
+            .with_clamp(self.target_clamp);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.group.k;

@@ -15,6 +15,8 @@ pub mod tempered;
 pub mod tiles;
 
 #[cfg(test)]
+mod clamp_tests;
+#[cfg(test)]
 mod layer_tests;
 #[cfg(test)]
 mod media_tests;

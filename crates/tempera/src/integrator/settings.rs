@@ -168,6 +168,10 @@ pub struct IntegratorSettings {
     /// depths' normalisers as the render goes on (0: the bootstrap's alone).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub normaliser_share: Option<f64>,
+    /// MMLT: clamp each depth's target at this many times the mean of its bootstrap's
+    /// non-zero values (0: never).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_clamp: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
@@ -282,6 +286,7 @@ impl IntegratorSettings {
             ("allocation", self.allocation.is_some(), kind == Mmlt || tempered),
             ("independent_below", self.independent_below.is_some(), kind == Mmlt || tempered),
             ("normaliser_share", self.normaliser_share.is_some(), kind == Mmlt || tempered),
+            ("target_clamp", self.target_clamp.is_some(), kind == Mmlt),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
@@ -349,6 +354,9 @@ impl IntegratorSettings {
         check_probability("collapse_above", self.collapse_above)?;
         check_probability("collapse_below", self.collapse_below)?;
         check_range("normaliser_share", self.normaliser_share, 0.0..=1.0)?;
+        if self.target_clamp.is_some_and(|c| !(c == 0.0 || (1.0..=1e9).contains(&c))) {
+            return Err("target_clamp must be 0 (never) or between 1 and 1e9".into());
+        }
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
         if self.flattening == Some(Flattening::Power) && self.max_temperature.is_some_and(|t| t > 1.0) {
             return Err(
@@ -432,6 +440,7 @@ pub fn create(
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
                 independent_below: s.independent_below.unwrap_or(m.independent_below),
                 normaliser_share: s.normaliser_share.unwrap_or(m.normaliser_share),
+                target_clamp: s.target_clamp.unwrap_or(m.target_clamp),
                 depth_images: s.depth_images,
                 ..m
             })

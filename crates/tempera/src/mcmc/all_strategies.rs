@@ -9,7 +9,9 @@
 //! variance than one strategy scaled by `n`, because a path one strategy finds only by luck
 //! (a caustic reached from the camera) is weighted towards the strategy that samples it well
 //! (Hachisuka et al. 2014 §5 suggest exactly this for the normalisation). Each strategy's value
-//! counts as the chains count it: zero where NaN, infinite or negative.
+//! counts as the chains count it: zero where NaN, infinite or negative. Where the chains'
+//! target is clamped at `c` ([`super::ChainSettings::clamp`]), the one-strategy value `n·Y_s`
+//! is clamped as it is, and the estimate `Σ_s min(n·Y_s, c)/n` has the clamped target's mean.
 
 use super::{Moments, NormaliserMoments, target_value, valid_radiance};
 use crate::bidir::{Heuristic, Paths, camera_subpath_vertices, connect, light_subpath_vertices};
@@ -21,26 +23,34 @@ use rayon::prelude::*;
 
 /// The lower-variance estimator of depth `k`'s normalisation that MMLT's targets use: points
 /// on the emitters connected to the camera at depth 0 ([`super::direct`]; none with an
-/// environment light), every strategy at once beyond.
-pub fn depth_normaliser(scene: &Scene, k: usize, seed: u64, samples: usize) -> Option<(NormaliserMoments, u64)> {
+/// environment light), every strategy at once beyond, for a target clamped at `clamp` (infinite:
+/// none; depth 0's target is never clamped).
+pub fn depth_normaliser(
+    scene: &Scene,
+    k: usize,
+    seed: u64,
+    samples: usize,
+    clamp: f32,
+) -> Option<(NormaliserMoments, u64)> {
     if k == 0 {
+        debug_assert!(clamp.is_infinite(), "depth 0's normaliser cannot estimate a clamped target");
         // Depth 0's target is not one of these estimates' terms: its variance is not theirs.
         super::direct::direct_emission(scene, seed, samples)
             .map(|(moments, rays)| (NormaliserMoments { moments, one_sample_sum2: None }, rays))
     } else {
-        Some(all_strategies(scene, k, seed, samples))
+        Some(all_strategies(scene, k, seed, samples, clamp))
     }
 }
 
-/// `samples` all-strategy estimates of `b_k` for depth `k ≥ 1` (seeded by `seed`): their
-/// moments, with the second moment of MMLT's one-strategy value given each sample
-/// ([`NormaliserMoments`]), and the rays traced.
-pub fn all_strategies(scene: &Scene, k: usize, seed: u64, samples: usize) -> (NormaliserMoments, u64) {
+/// `samples` all-strategy estimates of `b_k` for depth `k ≥ 1` (seeded by `seed`) under the
+/// target clamped at `clamp` (infinite: none): their moments, with the second moment of MMLT's
+/// one-strategy value given each sample ([`NormaliserMoments`]), and the rays traced.
+pub fn all_strategies(scene: &Scene, k: usize, seed: u64, samples: usize, clamp: f32) -> (NormaliserMoments, u64) {
     let values: Vec<(f64, f64, u64)> = (0..samples)
         .into_par_iter()
         .map_init(Paths::default, |paths, i| {
             let mut sampler = IndependentSampler::new(hash(&[seed, 0xa115, k as u64, i as u64]), k as u64);
-            sample(scene, k, &mut sampler, paths)
+            sample(scene, k, &mut sampler, paths, clamp)
         })
         .collect();
     let (mut moments, mut one_sample_sum2) = (Moments::default(), 0.0);
@@ -53,15 +63,18 @@ pub fn all_strategies(scene: &Scene, k: usize, seed: u64, samples: usize) -> (No
 
 /// One estimate: the sum over the strategies of depth `k` of their MIS-weighted luminance
 /// `Y_s`; the second moment `n Σ_s Y_s²` of MMLT's target `n·Y_s` (one of the `n = k + 2`
-/// strategies picked uniformly) on the same subpaths; and the rays traced.
-fn sample(scene: &Scene, k: usize, sampler: &mut IndependentSampler, paths: &mut Paths) -> (f64, f64, u64) {
+/// strategies picked uniformly) on the same subpaths; and the rays traced. With a finite
+/// `clamp`, each `Y_s` is `min(n·Y_s, clamp)/n`.
+fn sample(scene: &Scene, k: usize, sampler: &mut IndependentSampler, paths: &mut Paths, clamp: f32) -> (f64, f64, u64) {
     let (mut sum, mut sum2) = (0.0, 0.0);
+    let n = (k + 2) as f64;
     let rays = each_strategy(scene, k, sampler, paths, |_, l| {
         let y = f64::from(target_value(luminance(l)));
+        let y = if clamp.is_finite() { (n * y).min(f64::from(clamp)) / n } else { y };
         sum += y;
         sum2 += y * y;
     });
-    (sum, (k + 2) as f64 * sum2, rays)
+    (sum, n * sum2, rays)
 }
 
 /// Samples one camera and one light subpath for depth `k ≥ 1` and hands every strategy's
@@ -139,7 +152,7 @@ mod tests {
             for k in 1..=4 {
                 let n = 200_000;
                 let one = mmlt_target_moments(&scene, k, 9, n);
-                let (all, _) = all_strategies(&scene, k, 9, n);
+                let (all, _) = all_strategies(&scene, k, 9, n, f32::INFINITY);
                 let (ea, eb) = assert_same_mean(&format!("{name} depth {k}"), &one, &all.moments);
                 let measured = all.target_variance().unwrap();
                 let (mean_all, _) = all.moments.mean_and_rel_se();

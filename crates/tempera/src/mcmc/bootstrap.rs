@@ -74,6 +74,9 @@ pub struct Bootstrap {
     /// The rays the values and the normaliser's samples traced.
     pub rays: u64,
     pub normaliser_rays: u64,
+    /// The value the target is clamped at (infinite: none): `values` are clamped, the
+    /// normaliser estimates the clamped mean, and the group's chains clamp their states.
+    pub clamp: f32,
 }
 
 impl Bootstrap {
@@ -87,7 +90,15 @@ impl Bootstrap {
                 (state.value(), state.invalid(), rays)
             })
             .collect();
-        let values: Vec<f32> = results.iter().map(|r| r.0).collect();
+        let mut values: Vec<f32> = results.iter().map(|r| r.0).collect();
+        let clamp = if settings.clamp > 0.0 && target.clampable() {
+            clamp_threshold(&values, settings.clamp)
+        } else {
+            f32::INFINITY
+        };
+        if clamp.is_finite() {
+            values.iter_mut().for_each(|v| *v = v.min(clamp));
+        }
         let n = values.len().max(1) as f64;
         let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
         let sum2 = values.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>();
@@ -97,13 +108,13 @@ impl Bootstrap {
         let mut normaliser_rays = 0;
         let normaliser = (0..FOLDS)
             .map(|f| {
-                target.normaliser(hash(&[seed, 0x4a1f, f as u64]), per_fold).map(|(m, r)| {
+                target.normaliser(hash(&[seed, 0x4a1f, f as u64]), per_fold, clamp).map(|(m, r)| {
                     normaliser_rays += r;
                     m
                 })
             })
             .collect();
-        (Bootstrap { values, mean, sum2, invalid, normaliser, rays, normaliser_rays }, rays + normaliser_rays)
+        (Bootstrap { values, mean, sum2, invalid, normaliser, rays, normaliser_rays, clamp }, rays + normaliser_rays)
     }
 
     /// The group's normalisation as far as the bootstrap knows it.
@@ -227,6 +238,19 @@ impl Bootstrap {
     }
 }
 
+/// The value a target whose bootstrap drew `values` is clamped at: `factor` times the mean of
+/// the non-zero values (infinite where there are none). The mean of the non-zero values, not of
+/// all: a target that is zero on most of primary sample space (a small light seen directly)
+/// has large values wherever it is not, and those are its ordinary values, not its tail.
+fn clamp_threshold(values: &[f32], factor: f64) -> f32 {
+    let (mut n, mut sum) = (0u64, 0.0f64);
+    for &v in values.iter().filter(|&&v| v > 0.0) {
+        n += 1;
+        sum += f64::from(v);
+    }
+    if n == 0 { f32::INFINITY } else { (factor * sum / n as f64) as f32 }
+}
+
 /// The precision (inverse variance) of a mean of `n` samples with the per-sample variance
 /// measured on the samples `m` holds: infinite where they all had one non-zero value, zero
 /// where they saw no light (nothing is known then).
@@ -261,7 +285,16 @@ mod tests {
     fn bootstrap(values: Vec<f32>, normaliser: Vec<NormaliserMoments>) -> Bootstrap {
         let all = moments(&values.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
         let (mean, sum2) = (all.sum / all.n as f64, all.sum2);
-        Bootstrap { mean, sum2, values, invalid: 0, rays: 0, normaliser_rays: 0, normaliser: Some(normaliser) }
+        Bootstrap {
+            mean,
+            sum2,
+            values,
+            invalid: 0,
+            rays: 0,
+            normaliser_rays: 0,
+            normaliser: Some(normaliser),
+            clamp: f32::INFINITY,
+        }
     }
 
     fn moments(values: &[f64]) -> Moments {

@@ -20,6 +20,9 @@ pub trait State: Default {
     fn technique(&self) -> usize;
     /// Adds the state's contributions, each times `scale`, to the film.
     fn splat(&self, splats: &SharedSplats, scale: f32);
+    /// Clamps the target value at `c` (the contributions stay): only states of targets that
+    /// are [`Target::clampable`] are ever clamped, so the others keep their value.
+    fn clamp_value(&mut self, _c: f32) {}
 }
 
 /// What evaluating a primary-sample-space state needs: the sampler holding the state, subpath
@@ -44,9 +47,16 @@ pub trait Target {
     fn evaluate(&self, cx: &mut EvalContext, recycled: Self::State) -> Self::State;
     /// An estimator of the target's mean (the normalisation `b`) with a lower variance than
     /// the target's own uniform samples, where the target has one: the moments of `samples`
-    /// estimates seeded by `seed`, and the rays traced.
-    fn normaliser(&self, _seed: u64, _samples: usize) -> Option<(NormaliserMoments, u64)> {
+    /// estimates seeded by `seed`, and the rays traced. `clamp` is the value at which the
+    /// chains clamp a [`Self::clampable`] target (infinite for every other target): the
+    /// estimate is then of the clamped target's mean.
+    fn normaliser(&self, _seed: u64, _samples: usize, _clamp: f32) -> Option<(NormaliserMoments, u64)> {
         None
+    }
+    /// Whether the chains may clamp the target's values ([`super::ChainSettings::clamp`]):
+    /// its states clamp their value and its normaliser (if any) estimates the clamped mean.
+    fn clampable(&self) -> bool {
+        false
     }
     /// The path depth `k ≥ 1` whose paths the target's values are, where the driver may
     /// sample it independently instead ([`super::independent`]); `None` for targets of another
@@ -67,6 +77,8 @@ pub struct Chain<S> {
     rng: Pcg32,
     current: S,
     proposal: S,
+    /// The value at which the target is clamped (infinite: none).
+    clamp: f32,
     pub stats: DepthStats,
     /// The large-step proposals' values.
     pub large: Moments,
@@ -75,14 +87,35 @@ pub struct Chain<S> {
 impl<S: State> Chain<S> {
     /// Starts from the state `sampler` holds (its first, large step), evaluated and accepted.
     pub fn start(target: &impl Target<State = S>, sampler: PssSampler, rng: Pcg32, depth: usize) -> Self {
+        Self::start_clamped(target, sampler, rng, depth, f32::INFINITY)
+    }
+
+    /// [`Self::start`] for a chain whose target is clamped at `clamp` (infinite: none), the
+    /// target of the clamped importance below. A chain on `g = min(f, c)` that splats `C/g`
+    /// estimates the image as one on `f` does (the splats of a state are its contribution over
+    /// the density it is visited with), normalised by `b_g = E[g]` instead of `E[f]` (Hoberock
+    /// & Hart 2010, arbitrary importance functions for Metropolis light transport): a value far
+    /// above `c` then weighs on its own pixels, as one bright sample of BDPT does, and not on
+    /// the whole depth's normalisation.
+    pub fn start_clamped(
+        target: &impl Target<State = S>,
+        sampler: PssSampler,
+        rng: Pcg32,
+        depth: usize,
+        clamp: f32,
+    ) -> Self {
         let mut cx = EvalContext::new(sampler);
-        let current = target.evaluate(&mut cx, S::default());
+        let mut current = target.evaluate(&mut cx, S::default());
+        if clamp.is_finite() {
+            current.clamp_value(clamp);
+        }
         cx.sampler.accept();
         Self {
             cx,
             rng,
             current,
             proposal: S::default(),
+            clamp,
             stats: DepthStats { depth, ..DepthStats::default() },
             large: Moments::default(),
         }
@@ -98,7 +131,8 @@ impl<S: State> Chain<S> {
         self.cx.rays += rays;
     }
 
-    /// Replaces this chain by `fresh`, keeping the count of rays traced by both.
+    /// Replaces this chain by `fresh`, keeping the count of rays traced by both (and `fresh`'s
+    /// clamp).
     pub fn restart(&mut self, fresh: Chain<S>) {
         let (rays, p) = (self.cx.rays, self.large_step_probability());
         *self = fresh;
@@ -210,6 +244,9 @@ impl<S: State> Chain<S> {
         self.cx.sampler.start_iteration();
         let large = self.cx.sampler.is_large_step();
         self.proposal = target.evaluate(&mut self.cx, std::mem::take(&mut self.proposal));
+        if self.clamp.is_finite() {
+            self.proposal.clamp_value(self.clamp);
+        }
         if large {
             observe(&mut self.proposal);
         }

@@ -52,6 +52,9 @@ pub struct ChainSettings {
     /// The share of the chains' rays spent on further samples of the groups' own normalisers
     /// as the render goes on ([`super::normaliser`]; 0: the bootstrap's alone).
     pub normaliser_share: f64,
+    /// Clamps each group's target, where it is [`Target::clampable`], at this many times the
+    /// mean of its bootstrap's non-zero values ([`Chain::start_clamped`]); 0: never.
+    pub clamp: f64,
 }
 
 /// How a group's splat layers are normalised, decided when the group is prepared.
@@ -140,6 +143,8 @@ pub struct GroupContext<'a> {
     pub seed: u64,
     pub settings: &'a ChainSettings,
     pub budget: Option<u64>,
+    /// The value the group's chains clamp its target at ([`Bootstrap::clamp`]).
+    pub clamp: f32,
 }
 
 impl GroupContext<'_> {
@@ -148,7 +153,7 @@ impl GroupContext<'_> {
     /// Markov-chain integrator starts so.
     pub fn start_chain<T: Target>(&self, target: &T, starts: &Distribution1D, u: f32, rng: Pcg32) -> Chain<T::State> {
         let (index, _, _) = starts.sample_discrete(u);
-        Chain::start(target, sampler_for(self.seed, self.k, index, self.settings), rng, self.k)
+        Chain::start_clamped(target, sampler_for(self.seed, self.k, index, self.settings), rng, self.k, self.clamp)
     }
 }
 
@@ -256,7 +261,14 @@ impl ChainSettings {
             group_images: false,
             independent_below: 0,
             normaliser_share: super::normaliser::DEFAULT_SHARE,
+            clamp: 0.0,
         }
+    }
+
+    /// These settings with clampable targets clamped at `clamp` times the mean of their
+    /// bootstrap's non-zero values (0: none).
+    pub fn with_clamp(self, clamp: f64) -> Self {
+        Self { clamp, ..self }
     }
 
     /// These settings with the depths whose bootstrap has fewer than `n` non-zero values
@@ -398,14 +410,15 @@ impl ChainSettings {
                 let (k, c) = (slot.group, slot.index);
                 let rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, c as u64]), 7);
                 let bootstrap = &boots[k].values;
-                let group = GroupContext { k, seed, settings: self, budget: slot.budget };
+                let group = GroupContext { k, seed, settings: self, budget: slot.budget, clamp: boots[k].clamp };
                 start_walker(StartContext { group, c, rng, starts: &starts[k], bootstrap })
             })
             .collect();
         let stop = || render.should_stop();
         // One footprint of the film's filter for every splat buffer.
         let footprint = Footprint::of(&scene.film);
-        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, groups, &footprint, &stop);
+        let clamps: Vec<f32> = boots.iter().map(|b| b.clamp).collect();
+        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, &clamps, &footprint, &stop);
         total_rays += rays;
         for slot in &iplan {
             prepared[slot.group].get_or_insert_with(|| Group {
@@ -500,7 +513,7 @@ impl ChainSettings {
         plan: &[Slot],
         walkers: &mut [W],
         seed: u64,
-        groups: usize,
+        clamps: &[f32],
         footprint: &std::sync::Arc<Footprint>,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> (Prepared<W>, u64) {
@@ -517,12 +530,12 @@ impl ChainSettings {
             .into_par_iter()
             .map(|(k, budget, group)| {
                 let start = std::time::Instant::now();
-                let cx = GroupContext { k, seed, settings: self, budget };
+                let cx = GroupContext { k, seed, settings: self, budget, clamp: clamps[k] };
                 let (shared, rays) = W::prepare_group(group, &cx, stop);
                 (k, shared, rays, start.elapsed().as_secs_f64())
             })
             .collect();
-        let mut prepared: Prepared<W> = (0..groups).map(|_| None).collect();
+        let mut prepared: Prepared<W> = (0..clamps.len()).map(|_| None).collect();
         let mut rays = 0;
         for (k, shared, r, seconds) in results {
             rays += r;

@@ -105,7 +105,7 @@ impl Topup {
                     return;
                 }
                 let c = self.chunks[k];
-                if let Some((m, r)) = target.normaliser(hash(&[seed, 0x70b0, k as u64, c]), CHUNK) {
+                if let Some((m, r)) = target.normaliser(hash(&[seed, 0x70b0, k as u64, c]), CHUNK, boots[k].clamp) {
                     folds[c as usize % FOLDS].merge(&m);
                     boots[k].normaliser_rays += r;
                     rays += r;

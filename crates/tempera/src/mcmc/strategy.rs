@@ -46,6 +46,10 @@ impl State for Contribution {
     fn splat(&self, splats: &SharedSplats, scale: f32) {
         splats.add(self.raster, self.l * scale);
     }
+
+    fn clamp_value(&mut self, c: f32) {
+        self.f = self.f.min(c);
+    }
 }
 
 /// Whether a radiance value may reach the film: finite and not negative.

@@ -160,8 +160,8 @@ impl Target for TemperedTarget<'_> {
     }
 
     /// As MMLT normalises the depth: replica 0's target is MMLT's.
-    fn normaliser(&self, seed: u64, samples: usize) -> Option<(super::NormaliserMoments, u64)> {
-        super::all_strategies::depth_normaliser(self.scene, self.depth, seed, samples)
+    fn normaliser(&self, seed: u64, samples: usize, clamp: f32) -> Option<(super::NormaliserMoments, u64)> {
+        super::all_strategies::depth_normaliser(self.scene, self.depth, seed, samples, clamp)
     }
 
     /// The main target's depth: the scene's own paths, unflattened.

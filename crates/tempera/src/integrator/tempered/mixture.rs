@@ -58,7 +58,7 @@ impl Target for MixtureTarget<'_, '_> {
         state
     }
 
-    fn normaliser(&self, seed: u64, samples: usize) -> Option<(NormaliserMoments, u64)> {
-        self.targets[0].normaliser(seed, samples)
+    fn normaliser(&self, seed: u64, samples: usize, clamp: f32) -> Option<(NormaliserMoments, u64)> {
+        self.targets[0].normaliser(seed, samples, clamp)
     }
 }
