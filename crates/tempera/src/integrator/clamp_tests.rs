@@ -7,7 +7,7 @@ use crate::mcmc::Moments;
 use crate::mcmc::all_strategies::all_strategies;
 
 /// Clamped at twice the mean of the non-zero bootstrap values (far below what the option is
-/// for, so that most of the light is carried by clamped states), MMLT still agrees with BDPT
+/// for, so that the clamp lowers every depth's `b`), MMLT still agrees with BDPT
 /// on a Cornell box, block by block, and on the default scene (caustics), in the mean; the
 /// clamp did bite (every clamped depth's `b` is well below the unclamped one), and the
 /// clamped render is the same at any thread count.
@@ -56,12 +56,8 @@ fn the_clamped_normaliser_estimates_the_clamped_mean() {
         let values = crate::testing::mmlt_target_values(&scene, k, 9, n);
         let nonzero: Vec<f64> = values.iter().copied().filter(|&v| v > 0.0).collect();
         let c = 1.5 * nonzero.iter().sum::<f64>() / nonzero.len() as f64;
-        let moments = |values: &mut dyn Iterator<Item = f64>| {
-            let mut m = Moments::default();
-            values.for_each(|v| m.push(v));
-            m
-        };
-        let clamped = moments(&mut values.iter().map(|&v| v.min(c)));
+        let mut clamped = Moments::default();
+        values.iter().for_each(|&v| clamped.push(v.min(c)));
         let (all, _) = all_strategies(&scene, k, 9, n, c as f32);
         crate::testing::assert_same_mean(&format!("depth {k}"), &clamped, &all.moments);
         let (unclamped, _) = all_strategies(&scene, k, 9, n, f32::INFINITY);

@@ -209,12 +209,7 @@ impl Bootstrap {
     /// cap of 8. Zeros are left out: a target that is zero on most of primary sample space (a
     /// small light seen directly) is easy for a chain once found.
     pub fn spread(&self) -> f64 {
-        let (mut n, mut sum, mut sum2) = (0u64, 0.0f64, 0.0f64);
-        for &v in self.values.iter().filter(|&&v| v > 0.0) {
-            n += 1;
-            sum += f64::from(v);
-            sum2 += f64::from(v).powi(2);
-        }
+        let Moments { sum, sum2, n } = nonzero_moments(&self.values);
         if n == 0 || sum <= 0.0 {
             return 1.0;
         }
@@ -243,12 +238,15 @@ impl Bootstrap {
 /// all: a target that is zero on most of primary sample space (a small light seen directly)
 /// has large values wherever it is not, and those are its ordinary values, not its tail.
 fn clamp_threshold(values: &[f32], factor: f64) -> f32 {
-    let (mut n, mut sum) = (0u64, 0.0f64);
-    for &v in values.iter().filter(|&&v| v > 0.0) {
-        n += 1;
-        sum += f64::from(v);
-    }
+    let Moments { sum, n, .. } = nonzero_moments(values);
     if n == 0 { f32::INFINITY } else { (factor * sum / n as f64) as f32 }
+}
+
+/// The moments of the non-zero values among `values`.
+fn nonzero_moments(values: &[f32]) -> Moments {
+    let mut m = Moments::default();
+    values.iter().filter(|&&v| v > 0.0).for_each(|&v| m.push(f64::from(v)));
+    m
 }
 
 /// The precision (inverse variance) of a mean of `n` samples with the per-sample variance
