@@ -436,7 +436,11 @@ impl ChainSettings {
             .map(|&k| &prepared[k].as_ref().expect("every planned group is prepared").splats[0])
             .collect();
         let run_round = |walkers: &mut [W], independents: &mut [Independent], quota: &(dyn Fn(&Slot) -> u64 + Sync)| {
-            walkers.par_iter_mut().zip(&plan).enumerate().filter(|(i, _)| cluster.owns(*i)).for_each(
+            // One walker per job: walkers differ in cost by orders of magnitude (the plan is
+            // ordered by group, and the shallow depths hold most of the mutations), and rayon's
+            // adaptive splitting would otherwise leave one thread a quarter of the plan to run
+            // alone once the others have finished theirs.
+            walkers.par_iter_mut().with_max_len(1).zip(&plan).enumerate().filter(|(i, _)| cluster.owns(*i)).for_each(
                 |(_, (walker, slot))| {
                     let group = prepared[slot.group].as_ref().expect("every planned group is prepared");
                     let shared = group.shared.as_ref().expect("a group of walkers has their shared state");
@@ -446,6 +450,7 @@ impl ChainSettings {
             );
             independents
                 .par_iter_mut()
+                .with_max_len(1)
                 .zip(&iplan)
                 .enumerate()
                 .filter(|(i, _)| cluster.owns(plan.len() + *i))
@@ -528,6 +533,7 @@ impl ChainSettings {
         }
         let results: Vec<(usize, W::Group, u64, f64)> = slices
             .into_par_iter()
+            .with_max_len(1)
             .map(|(k, budget, group)| {
                 let start = std::time::Instant::now();
                 let cx = GroupContext { k, seed, settings: self, budget, clamp: clamps[k] };

@@ -20,8 +20,9 @@
 //! thread count and at any rank count (every rank draws every chunk).
 
 use super::bootstrap::{Bootstrap, FOLDS};
-use super::{Moments, Target};
+use super::{Moments, NormaliserMoments, Target};
 use crate::math::rng::hash;
+use rayon::prelude::*;
 
 /// Normaliser samples per chunk.
 const CHUNK: usize = 64;
@@ -69,7 +70,7 @@ impl Topup {
         targets: &(impl Fn(usize) -> T + Sync),
         seed: u64,
         mutations: u64,
-        stop: &dyn Fn() -> bool,
+        stop: &(dyn Fn() -> bool + Sync),
     ) {
         let budget = self.rays_per_mutation * mutations as f64;
         let mut due = self.chunks.clone();
@@ -95,23 +96,39 @@ impl Topup {
             planned += rays;
             due[k] += 1;
         }
+        // The chunks due, group by group in index order, drawn in parallel (a chunk at a deep
+        // depth costs many times one at a shallow one, so each is a job of its own) and merged
+        // in that order, so the sums are the same at any thread count.
+        let jobs: Vec<(usize, u64)> = due
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| boots[*k].normaliser.is_some())
+            .flat_map(|(k, &due)| (self.chunks[k]..due).map(move |c| (k, c)))
+            .collect();
+        let clamps: Vec<f32> = boots.iter().map(|b| b.clamp).collect();
+        let drawn: Vec<Option<Option<(NormaliserMoments, u64)>>> = jobs
+            .par_iter()
+            .with_max_len(1)
+            .map(|&(k, c)| {
+                (!stop()).then(|| targets(k).normaliser(hash(&[seed, 0x70b0, k as u64, c]), CHUNK, clamps[k]))
+            })
+            .collect();
         let mut rays = 0;
-        for (k, &due) in due.iter().enumerate() {
-            let Some(folds) = boots[k].normaliser.as_mut() else { continue };
-            let target = targets(k);
-            while self.chunks[k] < due {
-                if stop() {
-                    self.rays += rays;
-                    return;
-                }
-                let c = self.chunks[k];
-                if let Some((m, r)) = target.normaliser(hash(&[seed, 0x70b0, k as u64, c]), CHUNK, boots[k].clamp) {
-                    folds[c as usize % FOLDS].merge(&m);
-                    boots[k].normaliser_rays += r;
-                    rays += r;
-                }
-                self.chunks[k] += 1;
+        // A group's chunks stay consecutive: once one was not drawn (the render was stopped),
+        // the group's later ones are dropped too.
+        let mut stopped = vec![false; boots.len()];
+        for (&(k, c), drawn) in jobs.iter().zip(drawn) {
+            let Some(drawn) = drawn.filter(|_| !stopped[k]) else {
+                stopped[k] = true;
+                continue;
+            };
+            let folds = boots[k].normaliser.as_mut().expect("only groups with a normaliser have jobs");
+            if let Some((m, r)) = drawn {
+                folds[c as usize % FOLDS].merge(&m);
+                boots[k].normaliser_rays += r;
+                rays += r;
             }
+            self.chunks[k] = c + 1;
         }
         self.rays += rays;
     }
