@@ -105,25 +105,22 @@ impl Topup {
             .filter(|(k, _)| boots[*k].normaliser.is_some())
             .flat_map(|(k, &due)| (self.chunks[k]..due).map(move |c| (k, c)))
             .collect();
-        let clamps: Vec<f32> = boots.iter().map(|b| b.clamp).collect();
-        let drawn: Vec<Option<Option<(NormaliserMoments, u64)>>> = jobs
-            .par_iter()
-            .with_max_len(1)
-            .map(|&(k, c)| {
-                (!stop()).then(|| targets(k).normaliser(hash(&[seed, 0x70b0, k as u64, c]), CHUNK, clamps[k]))
-            })
-            .collect();
+        let drawn: Vec<Option<Option<(NormaliserMoments, u64)>>> = {
+            let boots = &*boots;
+            jobs.par_iter()
+                .with_max_len(1)
+                .map(|&(k, c)| {
+                    (!stop()).then(|| targets(k).normaliser(hash(&[seed, 0x70b0, k as u64, c]), CHUNK, boots[k].clamp))
+                })
+                .collect()
+        };
         let mut rays = 0;
-        // A group's chunks stay consecutive: once one was not drawn (the render was stopped),
-        // the group's later ones are dropped too.
-        let mut stopped = vec![false; boots.len()];
+        // Merged up to the first chunk not drawn (the render was stopped), so that each
+        // group's chunks stay consecutive.
         for (&(k, c), drawn) in jobs.iter().zip(drawn) {
-            let Some(drawn) = drawn.filter(|_| !stopped[k]) else {
-                stopped[k] = true;
-                continue;
-            };
-            let folds = boots[k].normaliser.as_mut().expect("only groups with a normaliser have jobs");
+            let Some(drawn) = drawn else { break };
             if let Some((m, r)) = drawn {
+                let folds = boots[k].normaliser.as_mut().expect("only groups with a normaliser have jobs");
                 folds[c as usize % FOLDS].merge(&m);
                 boots[k].normaliser_rays += r;
                 rays += r;
