@@ -60,6 +60,10 @@ fn random_walk<S: Sampler>(
                     v.pdf_fwd = path[prev].convert_density(pdf_fwd, &v);
                     path.push(v);
                     made += 1;
+                    if made == bounces {
+                        // The last vertex: a direction sampled here would go unused.
+                        return;
+                    }
                     // The phase function is sampled exactly (weight one) and is symmetric.
                     let (wi, pdf) = med.sample_phase(-ray.d, sampler.next_2d());
                     pdf_fwd = pdf;
@@ -113,6 +117,13 @@ fn random_walk<S: Sampler>(
         v.pdf_fwd = path[prev].convert_density(pdf_fwd, &v);
         path.push(v);
         made += 1;
+        if made == bounces {
+            // The subpath is complete. A direction sampled at its last vertex would only set
+            // the previous vertex's reverse density and this one's delta flag, and a connection
+            // recomputes both at its endpoints (`mis::reverse_pdfs`), as pbrt-v4's walk, which
+            // stops here too, does.
+            return;
+        }
         let uc = sampler.next_1d();
         let u = sampler.next_2d();
         let Some(bs) = bsdf.sample(it.wo, uc, u, mode) else { return };

@@ -44,6 +44,19 @@ impl Camera {
         }
     }
 
+    /// Whether the camera's rays depend on their lens sample (a thin lens; a pinhole's do
+    /// not). Samplers whose numbers cost something draw lens samples only when they do.
+    #[inline]
+    pub fn has_lens(&self) -> bool {
+        match self {
+            Camera::Perspective(c) => c.has_lens(),
+        }
+    }
+
+    /// The lens sample of a camera without a lens ([`Self::has_lens`]): any value gives the
+    /// same rays.
+    pub const NO_LENS: Vec2 = Vec2::new(0.5, 0.5);
+
     /// Importance of a ray leaving the lens, and the raster position it passes through.
     pub fn we(&self, ray: &Ray) -> Option<(Rgb, Vec2)> {
         match self {

@@ -100,6 +100,11 @@ impl PerspectiveCamera {
         }
     }
 
+    /// Whether rays depend on their lens sample (a thin lens of positive radius).
+    pub fn has_lens(&self) -> bool {
+        self.lens_radius > 0.0
+    }
+
     fn lens_area(&self) -> f32 {
         if self.lens_radius > 0.0 { PI * self.lens_radius * self.lens_radius } else { 1.0 }
     }

@@ -160,14 +160,18 @@ fn bdpt_agrees_with_the_path_tracer_in_a_scattering_medium() {
     assert_agree("light tracing vs path in a medium", &light_tracing.image, &path.image, 8, 0.03);
 }
 
-/// The Markov-chain integrators in a scattering medium agree with BDPT (image mean within
-/// 2 %, every 8×8 block within its noise plus 5 %).
+/// The Markov-chain integrators in a scattering medium agree with BDPT (image mean of four seeds
+/// within 2 % of a 4096-spp BDPT render's, every 8×8 block of one seed within the noise of a
+/// 512-spp render plus 5 %). One seed of BDPT at 512 spp spreads by about 3 % in its image
+/// mean here, and one seed of PSSMLT by about 2 %.
 #[test]
 fn markov_chain_integrators_agree_with_bdpt_in_a_scattering_medium() {
     let scene = foggy_cornell_box(16);
     let bdpt = render_with(&scene, &BdptIntegrator::new(6), Budget::Samples(512), 21, 0);
     let reference = super::tests::block_stats(&bdpt.image, 8);
     let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
+    let fine = render_with(&scene, &BdptIntegrator::new(6), Budget::Samples(4096), 31, 0);
+    let b = mean(&super::tests::block_stats(&fine.image, 8));
     for integrator in [
         &MmltIntegrator { bootstrap: 100_000, ..MmltIntegrator::new(6) } as &dyn Integrator,
         &PssmltIntegrator::new(6),
@@ -177,7 +181,9 @@ fn markov_chain_integrators_agree_with_bdpt_in_a_scattering_medium() {
         let name = integrator.name();
         assert!(out.chains.iter().all(|d| d.invalid == 0), "{name}: invalid samples");
         let blocks = super::tests::block_stats(&out.image, 8);
-        let (a, b) = (mean(&blocks), mean(&reference));
+        let others = [23, 24, 25].map(|seed| render_with(&scene, integrator, Budget::Samples(1024), seed, 0));
+        let a =
+            (mean(&blocks) + others.iter().map(|o| mean(&super::tests::block_stats(&o.image, 8))).sum::<f64>()) / 4.0;
         assert!((a / b - 1.0).abs() < 0.02, "{name}: image mean {a} vs bdpt {b}");
         for (i, ((ma, _), (mb, sb))) in blocks.iter().zip(&reference).enumerate() {
             assert!((ma - mb).abs() < 4.0 * sb + 0.05 * mb, "{name}, block {i}: {ma} vs bdpt {mb} ± {sb}");

@@ -500,14 +500,23 @@ fn pssmlt_agrees_with_bdpt_on_a_cornell_box() {
     assert!(pssmlt.chains[0].b_rel_se < 0.01, "b is pinned down: {:?}", pssmlt.chains[0]);
 }
 
+/// The sphere's and the sky's mean over four seeds (one seed's sphere mean spreads by about
+/// 0.006 around 0.8 at this budget, so one seed would test the seed, not the estimator).
 #[test]
 fn pssmlt_passes_the_white_furnace() {
     let scene = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
-    let out = pssmlt_render(&scene, 256, 3, 0);
     let (sphere, sky) = classify_furnace_pixels(&scene);
-    let mean = |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
-    assert!((mean(&sphere) - 0.8).abs() < 0.01, "sphere {}", mean(&sphere));
-    assert!((mean(&sky) - 1.0).abs() < 0.01, "sky {}", mean(&sky));
+    let seeds = [3, 4, 5, 6];
+    let (mut sphere_mean, mut sky_mean) = (0.0, 0.0);
+    for seed in seeds {
+        let out = pssmlt_render(&scene, 256, seed, 0);
+        let mean =
+            |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
+        sphere_mean += mean(&sphere) / seeds.len() as f64;
+        sky_mean += mean(&sky) / seeds.len() as f64;
+    }
+    assert!((sphere_mean - 0.8).abs() < 0.01, "sphere {sphere_mean}");
+    assert!((sky_mean - 1.0).abs() < 0.01, "sky {sky_mean}");
 }
 
 #[test]

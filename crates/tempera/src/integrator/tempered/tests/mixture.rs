@@ -49,14 +49,21 @@ fn the_mixture_chain_agrees_with_bdpt_and_the_furnace_at_the_cost_of_one_chain()
     let run = |threads| base.render(&scene, &settings(4, 7, threads), &control).unwrap().image.pixels;
     assert!(run(1) == run(2), "same image at any thread count");
 
+    // The furnace over four seeds: one seed's sphere mean spreads by about 0.008 here.
     let furnace = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
-    let out = TemperedIntegrator { bootstrap: 100_000, replicas: 3, ..base }
-        .render(&furnace, &settings(128, 3, 0), &control)
-        .unwrap();
     let (sphere, sky) = classify_furnace_pixels(&furnace);
-    let m = |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
-    assert!((m(&sphere) - 0.8).abs() < 0.01, "furnace sphere {}", m(&sphere));
-    assert!((m(&sky) - 1.0).abs() < 0.01, "furnace sky {}", m(&sky));
+    let seeds = [3, 4, 5, 6];
+    let (mut sphere_mean, mut sky_mean) = (0.0, 0.0);
+    for seed in seeds {
+        let out = TemperedIntegrator { bootstrap: 100_000, replicas: 3, ..base.clone() }
+            .render(&furnace, &settings(128, seed, 0), &control)
+            .unwrap();
+        let m = |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
+        sphere_mean += m(&sphere) / seeds.len() as f64;
+        sky_mean += m(&sky) / seeds.len() as f64;
+    }
+    assert!((sphere_mean - 0.8).abs() < 0.01, "furnace sphere {sphere_mean}");
+    assert!((sky_mean - 1.0).abs() < 0.01, "furnace sky {sky_mean}");
 }
 
 #[test]
