@@ -581,3 +581,50 @@ fn time_budget_renders_deliver_snapshots() {
     check_snapshots(&BdptIntegrator::new(4), mean);
     check_snapshots(&MmltIntegrator { bootstrap: 20_000, chains: 8, ..MmltIntegrator::new(4) }, mean);
 }
+
+/// A thin lens (the sphere far out of focus): BDPT (whose light tracing samples the lens) and
+/// MMLT (which draws lens samples only for cameras that have a lens) agree with the path
+/// tracer block by block, and the path tracer's image differs from the pinhole's, so a lens
+/// sample that went unused would show.
+#[test]
+fn bidirectional_and_markov_chain_integrators_agree_through_a_thin_lens() {
+    let scene = |lens_radius: f32| {
+        let mut b = crate::scenes::cornell_box(32, 32);
+        let mut camera = crate::camera::CameraDesc::look_at(
+            crate::math::Vec3::new(0.0, 1.0, 3.9),
+            crate::math::Vec3::new(0.0, 1.0, 0.0),
+            crate::math::Vec3::Y,
+            38.0,
+        );
+        camera.lens_radius = lens_radius;
+        camera.focal_distance = 1.5;
+        b.set_camera(camera);
+        b.build().unwrap()
+    };
+    let (lens, pinhole) = (scene(0.25), scene(0.0));
+    assert!(lens.camera.has_lens() && !pinhole.camera.has_lens());
+    let path = render_with(&lens, &PathIntegrator::new(5), Budget::Samples(1024), 1, 0);
+    let sharp = render_with(&pinhole, &PathIntegrator::new(5), Budget::Samples(1024), 1, 0);
+    let (a, b) = (block_stats(&path.image, 2), block_stats(&sharp.image, 2));
+    let beyond =
+        a.iter().zip(&b).filter(|((ma, sa), (mb, sb))| (ma - mb).abs() > 6.0 * (sa * sa + sb * sb).sqrt()).count();
+    assert!(beyond >= 20, "the lens blurs the image: {beyond} of {} blocks differ", a.len());
+    // Nearer the blurred image than the sharp one, 2×2 pixels at a time.
+    let nearer_the_lens = |name: &str, img: &crate::texture::Image| {
+        let c = block_stats(img, 2);
+        let distance = |r: &[(f64, f64)]| c.iter().zip(r).map(|(x, y)| (x.0 - y.0).powi(2)).sum::<f64>();
+        let (blurred, pinhole) = (distance(&a), distance(&b));
+        assert!(blurred < 0.5 * pinhole, "{name}: {blurred} from the thin lens's image, {pinhole} from the pinhole's");
+    };
+    let bdpt = render_with(&lens, &BdptIntegrator::new(5), Budget::Samples(256), 2, 0);
+    assert_agree("bdpt through a thin lens", &bdpt.image, &path.image, 8, 0.02);
+    nearer_the_lens("bdpt", &bdpt.image);
+    let mmlt = mmlt_render(&lens, 2048, 3, 0);
+    nearer_the_lens("mmlt", &mmlt.image);
+    let (m, p) = (block_stats(&mmlt.image, 8), block_stats(&path.image, 8));
+    let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
+    assert!((mean(&m) / mean(&p) - 1.0).abs() < 0.02, "image means {} vs {}", mean(&m), mean(&p));
+    for (i, ((mm, _), (mp, sp))) in m.iter().zip(&p).enumerate() {
+        assert!((mm - mp).abs() < 4.0 * sp + 0.05 * mp, "block {i}: mmlt {mm} vs path {mp} ± {sp}");
+    }
+}
