@@ -162,8 +162,8 @@ fn bdpt_agrees_with_the_path_tracer_in_a_scattering_medium() {
 
 /// The Markov-chain integrators in a scattering medium agree with BDPT (image mean of four seeds
 /// within 2 % of a 4096-spp BDPT render's, every 8×8 block of one seed within the noise of a
-/// 512-spp render plus 5 %). One seed of BDPT at 512 spp spreads by about 3 % in its image
-/// mean here, and one seed of PSSMLT by about 2 %.
+/// 512-spp render plus 5 %). One seed of BDPT at 512 spp, or of a Markov chain at 1024
+/// mutations per pixel, spreads by about the bound in its image mean here.
 #[test]
 fn markov_chain_integrators_agree_with_bdpt_in_a_scattering_medium() {
     let scene = foggy_cornell_box(16);

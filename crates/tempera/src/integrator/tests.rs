@@ -500,8 +500,8 @@ fn pssmlt_agrees_with_bdpt_on_a_cornell_box() {
     assert!(pssmlt.chains[0].b_rel_se < 0.01, "b is pinned down: {:?}", pssmlt.chains[0]);
 }
 
-/// The sphere's and the sky's mean over four seeds (one seed's sphere mean spreads by about
-/// 0.006 around 0.8 at this budget, so one seed would test the seed, not the estimator).
+/// The sphere's and the sky's mean over four seeds: at this budget one seed's sphere mean
+/// spreads by nearly the bound, so one seed would test the seed, not the estimator.
 #[test]
 fn pssmlt_passes_the_white_furnace() {
     let scene = crate::scenes::furnace(0.8, 32, 32).build().unwrap();
