@@ -19,6 +19,8 @@ mod clamp_tests;
 #[cfg(test)]
 mod layer_tests;
 #[cfg(test)]
+mod markov_chain_tests;
+#[cfg(test)]
 mod media_tests;
 #[cfg(test)]
 mod tests;
