@@ -7,7 +7,6 @@
 use super::mis::{Heuristic, ReversePdfs, mis_weight_with, reverse_pdfs};
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
-use crate::camera::Camera;
 use crate::geometry::{Ray, spawn_ray_to};
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::sampler::{Sampler, Stream};
@@ -148,7 +147,7 @@ fn reach_camera<S: Sampler>(scene: &Scene, qs: &Vertex, sampler: &mut S, rays: &
         return None;
     }
     sampler.start_stream(Stream::Connection);
-    let u = if scene.camera.has_lens() { sampler.next_2d() } else { Camera::NO_LENS };
+    let u = scene.camera.lens_sample(sampler);
     let cs = scene.camera.sample_wi(qs.p, u)?;
     if cs.pdf.is_nan() || cs.pdf <= 0.0 || cs.importance.max_element() <= 0.0 {
         return None;

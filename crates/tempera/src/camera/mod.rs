@@ -8,6 +8,7 @@ pub use perspective::{CameraDesc, FovAxis, PerspectiveCamera};
 
 use crate::geometry::Ray;
 use crate::math::{Rgb, Vec2, Vec3};
+use crate::sampler::Sampler;
 
 /// A sampled connection from a scene point to the camera lens.
 #[derive(Clone, Copy, Debug)]
@@ -45,7 +46,7 @@ impl Camera {
     }
 
     /// Whether the camera's rays depend on their lens sample (a thin lens; a pinhole's do
-    /// not). Samplers whose numbers cost something draw lens samples only when they do.
+    /// not).
     #[inline]
     pub fn has_lens(&self) -> bool {
         match self {
@@ -53,9 +54,13 @@ impl Camera {
         }
     }
 
-    /// The lens sample of a camera without a lens ([`Self::has_lens`]): any value gives the
-    /// same rays.
-    pub const NO_LENS: Vec2 = Vec2::new(0.5, 0.5);
+    /// A lens sample for [`Self::generate_ray`] or [`Self::sample_wi`]: two numbers from
+    /// `sampler` for a camera with a lens, none for a pinhole, whose rays do not depend on it
+    /// (a primary-sample-space sampler's numbers cost a perturbation each).
+    #[inline]
+    pub fn lens_sample(&self, sampler: &mut impl Sampler) -> Vec2 {
+        if self.has_lens() { sampler.next_2d() } else { Vec2::new(0.5, 0.5) }
+    }
 
     /// Importance of a ray leaving the lens, and the raster position it passes through.
     pub fn we(&self, ray: &Ray) -> Option<(Rgb, Vec2)> {

@@ -15,7 +15,6 @@
 
 use super::{Moments, NormaliserMoments, target_value, valid_radiance};
 use crate::bidir::{Heuristic, Paths, camera_subpath_vertices, connect, light_subpath_vertices};
-use crate::camera::Camera;
 use crate::math::rng::hash;
 use crate::math::{Rgb, Vec2, luminance};
 use crate::sampler::{IndependentSampler, Sampler, Stream};
@@ -107,7 +106,7 @@ pub fn each_strategy_of(
     let deepest = depths.iter().copied().max().unwrap_or(0);
     sampler.start_stream(Stream::Camera);
     let film = sampler.next_2d();
-    let lens = if scene.camera.has_lens() { sampler.next_2d() } else { Camera::NO_LENS };
+    let lens = scene.camera.lens_sample(sampler);
     let (w, h) = (scene.film.width as f32, scene.film.height as f32);
     let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
     let ray = scene.camera.generate_ray(raster, lens);

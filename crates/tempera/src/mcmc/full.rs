@@ -7,7 +7,6 @@
 
 use super::{EvalContext, State, valid_radiance};
 use crate::bidir::{Heuristic, camera_subpath, connect, light_subpath};
-use crate::camera::Camera;
 use crate::film::SharedSplats;
 use crate::math::{Rgb, Vec2, luminance};
 use crate::sampler::{Sampler, Stream};
@@ -58,7 +57,7 @@ pub fn evaluate_full(
     let EvalContext { sampler, paths, rays } = cx;
     sampler.start_stream(Stream::Camera);
     let film = sampler.next_2d();
-    let lens = if scene.camera.has_lens() { sampler.next_2d() } else { Camera::NO_LENS };
+    let lens = scene.camera.lens_sample(sampler);
     let (w, h) = (scene.film.width as f32, scene.film.height as f32);
     let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
     let ray = scene.camera.generate_ray(raster, lens);

@@ -6,7 +6,6 @@
 use super::State;
 use super::chain::EvalContext;
 use crate::bidir::{Connection, Heuristic, Paths, camera_subpath_vertices, connect, light_subpath_vertices};
-use crate::camera::Camera;
 use crate::film::SharedSplats;
 use crate::math::{Rgb, Vec2, luminance};
 use crate::sampler::{Sampler, Stream};
@@ -82,14 +81,13 @@ pub fn evaluate_connection(scene: &Scene, k: usize, cx: &mut EvalContext, paths:
     let s = if k == 0 { 0 } else { ((u * n as f32) as usize).min(k + 1) };
     let t = k + 2 - s;
     let film = sampler.next_2d();
-    // The lens sample only where a camera ray is generated through a lens.
-    let lens = if t > 1 && scene.camera.has_lens() { sampler.next_2d() } else { Camera::NO_LENS };
     let (w, h) = (scene.film.width as f32, scene.film.height as f32);
     let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
     let none = Evaluated { s, t, n, raster, connection: None };
     paths.camera.clear();
     if t > 1 {
-        let ray = scene.camera.generate_ray(raster, lens);
+        // The lens sample only where a camera ray is generated.
+        let ray = scene.camera.generate_ray(raster, scene.camera.lens_sample(sampler));
         *rays += 1;
         camera_subpath_vertices(scene, ray, sampler, t, &mut paths.camera, rays);
         if paths.camera.len() != t {
