@@ -160,10 +160,11 @@ fn bdpt_agrees_with_the_path_tracer_in_a_scattering_medium() {
     assert_agree("light tracing vs path in a medium", &light_tracing.image, &path.image, 8, 0.03);
 }
 
-/// The Markov-chain integrators in a scattering medium agree with BDPT (image mean of four seeds
-/// within 2 % of a 4096-spp BDPT render's, every 8×8 block of one seed within the noise of a
-/// 512-spp render plus 5 %). One seed of BDPT at 512 spp, or of a Markov chain at 1024
-/// mutations per pixel, spreads by about the bound in its image mean here.
+/// The Markov-chain integrators in a scattering medium agree with BDPT (the image mean of eight
+/// seeds within three of its standard errors of a 4096-spp BDPT render's, plus 1 % for the
+/// reference's own error; every 8×8 block of one seed within the noise of a 512-spp render plus
+/// 5 %). One seed of PSSMLT at 1024 mutations per pixel spreads by about 2 % in its image mean
+/// here, MMLT's by a few tenths of a percent.
 #[test]
 fn markov_chain_integrators_agree_with_bdpt_in_a_scattering_medium() {
     let scene = foggy_cornell_box(16);
@@ -181,10 +182,13 @@ fn markov_chain_integrators_agree_with_bdpt_in_a_scattering_medium() {
         let name = integrator.name();
         assert!(out.chains.iter().all(|d| d.invalid == 0), "{name}: invalid samples");
         let blocks = super::tests::block_stats(&out.image, 8);
-        let others = [23, 24, 25].map(|seed| render_with(&scene, integrator, Budget::Samples(1024), seed, 0));
-        let a =
-            (mean(&blocks) + others.iter().map(|o| mean(&super::tests::block_stats(&o.image, 8))).sum::<f64>()) / 4.0;
-        assert!((a / b - 1.0).abs() < 0.02, "{name}: image mean {a} vs bdpt {b}");
+        let others = (23..30).map(|seed| render_with(&scene, integrator, Budget::Samples(1024), seed, 0));
+        let ratios: Vec<f64> = std::iter::once(mean(&blocks))
+            .chain(others.map(|o| mean(&super::tests::block_stats(&o.image, 8))))
+            .map(|a| a / b)
+            .collect();
+        let (ratio, se) = mean_and_se(&ratios);
+        assert!((ratio - 1.0).abs() < 0.01 + 3.0 * se, "{name}: image mean over bdpt's {ratio} ± {se} ({ratios:?})");
         for (i, ((ma, _), (mb, sb))) in blocks.iter().zip(&reference).enumerate() {
             assert!((ma - mb).abs() < 4.0 * sb + 0.05 * mb, "{name}, block {i}: {ma} vs bdpt {mb} ± {sb}");
         }

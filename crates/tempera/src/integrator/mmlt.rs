@@ -6,7 +6,9 @@
 
 use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
 use crate::mcmc::all_strategies::depth_normaliser;
-use crate::mcmc::{ChainSettings, Contribution, EvalContext, NormaliserMoments, Single, Target, evaluate};
+use crate::mcmc::{
+    ChainSettings, Contribution, EvalContext, NormaliserMoments, Single, Target, evaluate, evaluate_depths,
+};
 use crate::scene::Scene;
 
 #[derive(Clone, Copy, Debug)]
@@ -78,6 +80,16 @@ impl Target for DepthTarget<'_> {
 
     fn independent_depth(&self) -> Option<usize> {
         (self.depth >= 1).then_some(self.depth)
+    }
+
+    /// Every depth's bootstrap sample `i` is one primary-sample-space point, valued at all
+    /// depths from one camera and one light subpath ([`evaluate_depths`]).
+    fn values_groups_together(&self) -> bool {
+        true
+    }
+
+    fn value_groups(&self, cx: &mut EvalContext, groups: usize, out: &mut Vec<crate::mcmc::GroupValue>) -> u64 {
+        evaluate_depths(self.scene, groups, cx, out)
     }
 }
 

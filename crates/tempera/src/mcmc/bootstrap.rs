@@ -2,24 +2,30 @@
 //! §13.4.4): independent uniform samples of the group's target. Their mean is the
 //! normalisation `b`, and chains start from them in proportion to their value, which removes
 //! start-up bias. Sample `i` of group `k` always has the same seed, so whoever needs the same
-//! samples again (tempering's calibration) evaluates them again.
+//! samples again (tempering's calibration) evaluates them again; it is the same point of primary
+//! sample space in every group, so groups whose targets value the same paths value it together.
 
 use super::driver::ChainSettings;
-use super::{EvalContext, Moments, NormaliserMoments, State, Target};
+use super::{EvalContext, GroupValue, Moments, NormaliserMoments, State, Target};
 use crate::bidir::Paths;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::hash;
 use crate::sampler::PssSampler;
 use rayon::prelude::*;
 
-/// Seed of bootstrap sample `i` of group `k`.
+/// Seed of the numbers of the chain that starts from bootstrap sample `i` of group `k`.
 fn bootstrap_seed(seed: u64, k: usize, i: usize) -> u64 {
     hash(&[seed, 0xb007, k as u64, i as u64])
 }
 
 /// The sampler holding bootstrap sample `i` of group `k` (a chain started from it mutates it).
+/// Sample `i` is the same primary-sample-space point in every group (a counter-based first
+/// state seeded by `i` alone), so groups whose targets value the same paths (MMLT's depths)
+/// can value it together ([`Target::value_groups`]); the numbers of the chain that mutates it
+/// are the group's own.
 pub fn sampler_for(seed: u64, k: usize, i: usize, settings: &ChainSettings) -> PssSampler {
     PssSampler::new(bootstrap_seed(seed, k, i), k as u64, settings.sigma, settings.large_step_probability)
+        .with_first_state(hash(&[seed, 0xb007, i as u64]))
 }
 
 /// Per-thread storage for evaluating independent samples one after the other.
@@ -83,14 +89,63 @@ impl Bootstrap {
     /// Evaluates `settings.bootstrap` samples of group `k` in parallel; returns them with the
     /// rays traced.
     pub fn run<T: Target + Sync>(target: &T, settings: &ChainSettings, seed: u64, k: usize) -> (Self, u64) {
-        let results: Vec<(f32, bool, u64)> = (0..settings.bootstrap)
+        let results: Vec<GroupValue> = (0..settings.bootstrap)
             .into_par_iter()
             .map_init(Scratch::default, |scratch, i| {
                 let (state, rays) = scratch.evaluate(target, sampler_for(seed, k, i, settings));
-                (state.value(), state.invalid(), rays)
+                GroupValue { value: state.value(), invalid: state.invalid(), rays }
             })
             .collect();
-        let mut values: Vec<f32> = results.iter().map(|r| r.0).collect();
+        let (boot, rays) = Self::from_results(target, settings, seed, &results);
+        (boot, rays + results.iter().map(|r| r.rays).sum::<u64>())
+    }
+
+    /// Evaluates `settings.bootstrap` samples of every group `k < groups` at once, where the
+    /// groups' targets value them together ([`Target::values_groups_together`]): sample `i`
+    /// is one point of primary sample space in every group ([`sampler_for`]), which one
+    /// evaluation values under every group's target. Each group gets the bootstrap its own
+    /// [`Self::run`] would give; returns them with the rays traced in all.
+    pub fn run_groups<T: Target + Sync>(
+        targets: &(impl Fn(usize) -> T + Sync),
+        settings: &ChainSettings,
+        seed: u64,
+        groups: usize,
+    ) -> (Vec<Self>, u64) {
+        let target = targets(0);
+        let per_sample: Vec<(Vec<GroupValue>, u64)> = (0..settings.bootstrap)
+            .into_par_iter()
+            .map_init(Scratch::<T::State>::default, |scratch, i| {
+                let mut cx = EvalContext {
+                    sampler: sampler_for(seed, 0, i, settings),
+                    paths: std::mem::take(&mut scratch.paths),
+                    rays: 0,
+                };
+                if let Some(spare) = scratch.spare.take() {
+                    cx.sampler.reuse_storage(spare);
+                }
+                let mut out = Vec::with_capacity(groups);
+                let rays = target.value_groups(&mut cx, groups, &mut out);
+                scratch.paths = cx.paths;
+                scratch.spare = Some(cx.sampler);
+                (out, rays)
+            })
+            .collect();
+        let mut rays: u64 = per_sample.iter().map(|p| p.1).sum();
+        let boots = (0..groups)
+            .map(|k| {
+                let results: Vec<GroupValue> = per_sample.iter().map(|p| p.0[k]).collect();
+                let (boot, r) = Self::from_results(&targets(k), settings, seed, &results);
+                rays += r;
+                boot
+            })
+            .collect();
+        (boots, rays)
+    }
+
+    /// A group's bootstrap from its samples' values, invalid flags and rays, with the
+    /// target's own normaliser drawn; returns it with the normaliser's rays.
+    fn from_results<T: Target>(target: &T, settings: &ChainSettings, seed: u64, results: &[GroupValue]) -> (Self, u64) {
+        let mut values: Vec<f32> = results.iter().map(|r| r.value).collect();
         let clamp = if settings.clamp > 0.0 && target.clampable() {
             clamp_threshold(&values, settings.clamp)
         } else {
@@ -102,8 +157,8 @@ impl Bootstrap {
         let n = values.len().max(1) as f64;
         let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
         let sum2 = values.iter().map(|&v| f64::from(v).powi(2)).sum::<f64>();
-        let invalid = results.iter().filter(|r| r.1).count() as u64;
-        let rays = results.iter().map(|r| r.2).sum();
+        let invalid = results.iter().filter(|r| r.invalid).count() as u64;
+        let rays = results.iter().map(|r| r.rays).sum();
         let per_fold = normaliser_samples(settings.bootstrap).div_ceil(FOLDS);
         let mut normaliser_rays = 0;
         let normaliser = (0..FOLDS)
@@ -114,7 +169,7 @@ impl Bootstrap {
                 })
             })
             .collect();
-        (Bootstrap { values, mean, sum2, invalid, normaliser, rays, normaliser_rays, clamp }, rays + normaliser_rays)
+        (Bootstrap { values, mean, sum2, invalid, normaliser, rays, normaliser_rays, clamp }, normaliser_rays)
     }
 
     /// The group's normalisation as far as the bootstrap knows it.

@@ -64,6 +64,27 @@ pub trait Target {
     fn independent_depth(&self) -> Option<usize> {
         None
     }
+    /// Whether [`Self::value_groups`] values a state under the targets of several groups at
+    /// once.
+    fn values_groups_together(&self) -> bool {
+        false
+    }
+    /// Values the state `cx.sampler` holds under the targets of groups `0..groups` at once,
+    /// where they share work (MMLT's depths share subpaths): pushes per group the value and
+    /// invalid flag its own target's evaluation gives and the rays that evaluation would
+    /// trace, and returns the rays traced in all. Only where [`Self::values_groups_together`].
+    fn value_groups(&self, _cx: &mut EvalContext, _groups: usize, _out: &mut Vec<GroupValue>) -> u64 {
+        unreachable!("a target that does not value groups together")
+    }
+}
+
+/// A sample's value under one group's target: what the target's evaluation gives for the
+/// state's value and invalid flag, and the rays that evaluation traces.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GroupValue {
+    pub value: f32,
+    pub invalid: bool,
+    pub rays: u64,
 }
 
 /// A target value as the chains use it: NaN, infinite, negative and zero values all count as

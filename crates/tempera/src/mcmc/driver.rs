@@ -325,14 +325,19 @@ impl ChainSettings {
         groups: usize,
         targets: &(impl Fn(usize) -> T + Sync),
     ) -> Result<(Vec<Bootstrap>, u64), String> {
-        let mut rays = 0;
-        let boots: Vec<Bootstrap> = (0..groups)
-            .map(|k| {
-                let (b, r) = Bootstrap::run(&targets(k), self, seed, k);
-                rays += r;
-                b
-            })
-            .collect();
+        let (boots, rays) = if groups > 1 && targets(0).values_groups_together() {
+            Bootstrap::run_groups(targets, self, seed, groups)
+        } else {
+            let mut rays = 0;
+            let boots: Vec<Bootstrap> = (0..groups)
+                .map(|k| {
+                    let (b, r) = Bootstrap::run(&targets(k), self, seed, k);
+                    rays += r;
+                    b
+                })
+                .collect();
+            (boots, rays)
+        };
         let b_total: f64 = boots.iter().map(Bootstrap::b).sum();
         if b_total.is_nan() || b_total <= 0.0 {
             return Err("no light path reaches the camera (every bootstrap sample was zero)".into());

@@ -18,9 +18,9 @@ pub mod strategy;
 pub mod tempered;
 
 pub use bootstrap::{Bootstrap, sampler_for};
-pub use chain::{Chain, EvalContext, State, Target, target_value};
+pub use chain::{Chain, EvalContext, GroupValue, State, Target, target_value};
 pub use driver::{ChainSettings, GroupContext, Layers, OneLayer, Single, StartContext, Walker};
 pub use full::{FullContribution, evaluate_full};
 pub use stats::{DepthStats, Moments, NormaliserMoments, SwapStats};
-pub use strategy::{Contribution, Evaluated, evaluate, evaluate_connection, valid_radiance};
+pub use strategy::{Contribution, Evaluated, evaluate, evaluate_connection, evaluate_depths, valid_radiance};
 pub use tempered::{Flattening, TemperedState, TemperedTarget};

@@ -4,8 +4,8 @@
 //! `(k+2)·w_{s,t}·f/p` and the chain's target its luminance.
 
 use super::State;
-use super::chain::EvalContext;
-use crate::bidir::{Connection, Heuristic, Paths, camera_subpath_vertices, connect, light_subpath_vertices};
+use super::chain::{EvalContext, GroupValue};
+use crate::bidir::{Connection, Heuristic, Paths, Subpaths, camera_subpath_vertices, connect, light_subpath_vertices};
 use crate::film::SharedSplats;
 use crate::math::{Rgb, Vec2, luminance};
 use crate::sampler::{Sampler, Stream};
@@ -70,16 +70,21 @@ pub struct Evaluated {
     pub connection: Option<Connection>,
 }
 
+/// The technique `(s, t)` of depth `k` that camera-stream number `u` chooses, and the number
+/// of the depth's strategies.
+fn technique(k: usize, u: f32) -> (usize, usize, usize) {
+    let n = if k == 0 { 1 } else { k + 2 };
+    let s = if k == 0 { 0 } else { ((u * n as f32) as usize).min(k + 1) };
+    (s, k + 2 - s, n)
+}
+
 /// Evaluates the state of `sampler` as a path of depth `k`: the first camera-stream number
 /// chooses the technique `s = min(⌊u·(k+2)⌋, k+1)` (depth 0 has the single technique (0, 2),
 /// as in pbrt-v4), the next two the film position. The subpaths are left in `paths`.
 pub fn evaluate_connection(scene: &Scene, k: usize, cx: &mut EvalContext, paths: &mut Paths) -> Evaluated {
     let (sampler, rays) = (&mut cx.sampler, &mut cx.rays);
     sampler.start_stream(Stream::Camera);
-    let u = sampler.next_1d();
-    let n = if k == 0 { 1 } else { k + 2 };
-    let s = if k == 0 { 0 } else { ((u * n as f32) as usize).min(k + 1) };
-    let t = k + 2 - s;
+    let (s, t, n) = technique(k, sampler.next_1d());
     let film = sampler.next_2d();
     let (w, h) = (scene.film.width as f32, scene.film.height as f32);
     let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
@@ -132,6 +137,80 @@ impl Evaluated {
     }
 }
 
+/// Evaluates the state of `cx.sampler` as a path of every depth `k < depths` at once: pushes
+/// each depth's value, invalid flag and rays to `out` (what [`evaluate`] at that depth gives
+/// for a sampler holding the same numbers), and returns the rays traced in all.
+///
+/// Each depth reads the camera stream's first number (its technique), the film position and
+/// lens sample, and then a prefix of one camera random walk and of one light random walk:
+/// a walk consumes the same numbers per vertex whatever its length and stops at its last
+/// vertex, and a connection recomputes the reverse densities and delta flags at its endpoints
+/// ([`crate::bidir::reverse_pdfs`]), so the prefix of a longer walk connects as the shorter walk
+/// does. The two walks are as long as the longest prefix any depth needs. With a counter-based
+/// first state ([`crate::sampler::PssSampler::with_first_state`]) the numbers do not depend on
+/// the order the streams are read in either, so this is the value a fresh sampler of the
+/// same state gives at each depth. A depth's rays are those its own evaluation would trace:
+/// the walks' rays up to its prefixes (a walk traces one ray per vertex after its first, and one
+/// more where it ends early), and its connection's.
+pub fn evaluate_depths(scene: &Scene, depths: usize, cx: &mut EvalContext, out: &mut Vec<GroupValue>) -> u64 {
+    out.clear();
+    let mut paths = std::mem::take(&mut cx.paths);
+    let (sampler, rays) = (&mut cx.sampler, &mut cx.rays);
+    let start = *rays;
+    sampler.start_stream(Stream::Camera);
+    let u = sampler.next_1d();
+    let film = sampler.next_2d();
+    let (w, h) = (scene.film.width as f32, scene.film.height as f32);
+    let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
+    let techniques: Vec<(usize, usize, usize)> = (0..depths).map(|k| technique(k, u)).collect();
+    let t_max = techniques.iter().map(|&(_, t, _)| t).max().unwrap_or(0);
+    let s_max = techniques.iter().map(|&(s, _, _)| s).max().unwrap_or(0);
+    paths.camera.clear();
+    let mut camera_rays = 0;
+    if t_max > 1 {
+        let ray = scene.camera.generate_ray(raster, scene.camera.lens_sample(sampler));
+        *rays += 1;
+        camera_subpath_vertices(scene, ray, sampler, t_max, &mut paths.camera, &mut camera_rays);
+    }
+    paths.light.clear();
+    let mut light_rays = 0;
+    if s_max > 1 {
+        light_subpath_vertices(scene, sampler, s_max, &mut paths.light, &mut light_rays);
+    }
+    *rays += camera_rays + light_rays;
+    // The rays a walk of `len` vertices (of the first `traced` rays in all) spends on a prefix of
+    // `n` vertices.
+    let prefix_rays = |n: usize, len: usize, traced: u64| if n > len { traced } else { traced.min(n as u64 - 1) };
+    for &(s, t, n) in &techniques {
+        let mut own = 0;
+        let camera_built = t <= 1 || paths.camera.len() >= t;
+        if t > 1 {
+            // The camera ray counts once where it is generated and again in the walk.
+            own += 1 + prefix_rays(t, paths.camera.len(), camera_rays);
+        }
+        // A depth's own evaluation builds its light subpath only once its camera subpath is
+        // complete.
+        if s > 1 && camera_built {
+            own += prefix_rays(s, paths.light.len(), light_rays);
+        }
+        let none = Evaluated { s, t, n, raster, connection: None };
+        let e = if camera_built && (s <= 1 || paths.light.len() >= s) {
+            let (light, camera) =
+                (&paths.light[..s.min(paths.light.len())], &paths.camera[..t.min(paths.camera.len())]);
+            let before = *rays;
+            let connection = connect(scene, Subpaths { light, camera }, (s, t), sampler, Heuristic::Power, rays);
+            own += *rays - before;
+            Evaluated { connection, ..none }
+        } else {
+            none
+        };
+        let c = e.untempered();
+        out.push(GroupValue { value: c.f, invalid: c.invalid, rays: own });
+    }
+    cx.paths = paths;
+    *rays - start
+}
+
 /// Evaluates the state of `cx.sampler` as a path of depth `k` ([`evaluate_connection`], the
 /// subpaths left in `cx.paths`).
 pub fn evaluate(scene: &Scene, k: usize, cx: &mut EvalContext) -> Contribution {
@@ -139,4 +218,73 @@ pub fn evaluate(scene: &Scene, k: usize, cx: &mut EvalContext) -> Contribution {
     let e = evaluate_connection(scene, k, cx, &mut paths);
     cx.paths = paths;
     e.untempered()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bidir::Tempering;
+    use crate::math::Vec3;
+    use crate::mcmc::{ChainSettings, Target, TemperedTarget, sampler_for};
+    use crate::medium::{Medium, MediumInterface};
+
+    /// Every depth's value of a bootstrap sample, valued at all depths from one pair of
+    /// subpaths, is bit for bit the value its own evaluation gives, with the rays that
+    /// evaluation traces: on the default scene (glossy and smooth surfaces, spheres, disks),
+    /// a Cornell box seen through a thin lens, and one filled with a scattering medium.
+    #[test]
+    fn depths_valued_together_equal_each_depth_valued_alone() {
+        let default = crate::scenes::default_scene();
+        let mut lens = crate::scenes::cornell_box(16, 16);
+        let mut camera =
+            crate::camera::CameraDesc::look_at(Vec3::new(0.0, 1.0, 3.9), Vec3::new(0.0, 1.0, 0.0), Vec3::Y, 38.0);
+        camera.lens_radius = 0.25;
+        camera.focal_distance = 1.5;
+        lens.set_camera(camera);
+        let mut fog = crate::scenes::cornell_box(16, 16);
+        let m = fog.add_medium(Medium { sigma_a: Rgb::splat(0.15), sigma_s: Rgb::new(0.6, 0.45, 0.3), g: 0.4 });
+        for shape in 0..fog.shape_count() {
+            fog.set_shape_medium(shape, MediumInterface { inside: Some(m), outside: Some(m) });
+        }
+        fog.set_camera_medium(Some(m));
+        let settings = ChainSettings::new(0, 0, 0.01, 0.3);
+        let depths = 9;
+        for (name, builder) in [("default", default), ("thin lens", lens), ("fog", fog)] {
+            let mut scene = builder.build().unwrap();
+            scene.set_resolution(16, 16);
+            let mut nonzero = vec![0; depths];
+            let (mut out, mut main_out) = (Vec::new(), Vec::new());
+            let temper = Tempering { a: 0.0, heuristic: Heuristic::Power, roughen_mis: false };
+            let main = TemperedTarget::new(&scene, 0, temper, 0.0);
+            assert!(main.values_groups_together());
+            for i in 0..3000 {
+                let mut cx = EvalContext::new(sampler_for(17, 0, i, &settings));
+                let traced = evaluate_depths(&scene, depths, &mut cx, &mut out);
+                assert_eq!(traced, cx.rays);
+                assert_eq!(out.len(), depths);
+                // Tempered MMLT's main target values them as MMLT does.
+                main.value_groups(&mut EvalContext::new(sampler_for(17, 0, i, &settings)), depths, &mut main_out);
+                assert_eq!(main_out, out);
+                for (k, &GroupValue { value: f, invalid, rays }) in out.iter().enumerate() {
+                    let mut alone = EvalContext::new(sampler_for(17, k, i, &settings));
+                    let c = evaluate(&scene, k, &mut alone);
+                    assert_eq!(f.to_bits(), c.f.to_bits(), "{name}: sample {i}, depth {k}");
+                    assert_eq!(invalid, c.invalid, "{name}: sample {i}, depth {k}");
+                    assert_eq!(
+                        rays,
+                        alone.rays,
+                        "{name}: rays of sample {i}, depth {k}: {c:?}, camera {} light {} traced {traced}",
+                        cx.paths.camera.len(),
+                        cx.paths.light.len()
+                    );
+                    nonzero[k] += usize::from(f > 0.0);
+                }
+            }
+            // Depth 0 sees the lights directly, a small part of the film.
+            assert!(
+                nonzero[0] > 0 && nonzero[1..].iter().all(|&n| n >= 100),
+                "{name}: too few non-zero values to mean anything: {nonzero:?}"
+            );
+        }
+    }
 }

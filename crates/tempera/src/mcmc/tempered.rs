@@ -168,6 +168,16 @@ impl Target for TemperedTarget<'_> {
     fn independent_depth(&self) -> Option<usize> {
         (self.depth >= 1 && self.tau == 0.0).then_some(self.depth)
     }
+
+    /// The main target values a state as MMLT does at every depth, so its bootstraps are
+    /// MMLT's, valued at all depths together.
+    fn values_groups_together(&self) -> bool {
+        self.tau == 0.0
+    }
+
+    fn value_groups(&self, cx: &mut EvalContext, groups: usize, out: &mut Vec<crate::mcmc::GroupValue>) -> u64 {
+        super::evaluate_depths(self.scene, groups, cx, out)
+    }
 }
 
 #[cfg(test)]

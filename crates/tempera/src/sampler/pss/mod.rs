@@ -7,7 +7,10 @@
 //! (`stream + 3·i`) and restart at their first entry, so a change of technique does not shift
 //! another stream's numbers. An entry first touched after the chain started is drawn as a fresh
 //! uniform (the stationary distribution of an unused component), and forgotten again if the
-//! proposal that drew it is rejected.
+//! proposal that drew it is rejected. A sampler may hold a counter-based first state
+//! ([`PssSampler::with_first_state`]): its entries' first values are then a hash of the state's
+//! seed and the entry's index, whatever order they are touched in, so that evaluating the state
+//! as paths of different lengths reads the same numbers wherever their entries coincide.
 
 use super::{Sampler, Stream};
 use crate::math::rng::Pcg32;
@@ -82,6 +85,13 @@ pub struct PssSampler {
     large_step: bool,
     stream: usize,
     stream_index: usize,
+    /// The seed of the counter-based first state, if the sampler has one.
+    first_state: Option<u64>,
+}
+
+/// The first value of entry `index` of the counter-based first state seeded by `seed`.
+fn first_value(seed: u64, index: usize) -> f32 {
+    (crate::math::rng::hash(&[seed, index as u64]) >> 40) as f32 * (1.0 / 16_777_216.0)
 }
 
 impl PssSampler {
@@ -98,7 +108,17 @@ impl PssSampler {
             large_step: true,
             stream: 0,
             stream_index: 0,
+            first_state: None,
         }
+    }
+
+    /// The sampler with a counter-based first state seeded by `seed`: the entries its first
+    /// evaluation touches take values that depend on `seed` and their index alone (not on
+    /// the order they are touched in, nor on the seed of the sampler's own numbers). Entries
+    /// first touched later are drawn from the sampler's numbers as usual.
+    pub fn with_first_state(mut self, seed: u64) -> Self {
+        self.first_state = Some(seed);
+        self
     }
 
     /// Takes over the storage of `old`'s entries (emptied) if this sampler has none yet: a
@@ -174,7 +194,9 @@ impl PssSampler {
         }
         e.backup_value = e.value;
         e.backup_modified = e.modified;
-        if e.modified == UNTOUCHED || large {
+        if let (UNTOUCHED, 0, Some(seed)) = (e.modified, iteration, self.first_state) {
+            e.value = first_value(seed, index);
+        } else if e.modified == UNTOUCHED || large {
             e.value = self.rng.next_f32();
         } else {
             // Entries not touched since the last accepted large step were replaced by it.

@@ -30,20 +30,28 @@ pub(super) fn glossy_corner(alpha: f32) -> Scene {
 }
 
 /// Neighbour acceptance at depth 2 and the ladder of `t` (four replicas, eight ensembles,
-/// 20,000 bootstrap samples) rendering `scene` at `mpp` mutations per pixel.
+/// 20,000 bootstrap samples) rendering `scene` at `mpp` mutations per pixel, averaged over four
+/// seeds: each seed tunes its ladder from its own bootstrap, whose estimate of the acceptance
+/// varies from seed to seed by a few hundredths.
 fn acceptance_and_ladder(scene: &Scene, t: TemperedIntegrator, mpp: u32) -> (f64, Vec<f32>) {
     acceptance_and_ladder_of(scene, TemperedIntegrator { replicas: 4, ..t }, mpp)
 }
 
 /// The same with the replicas `t` has.
 fn acceptance_and_ladder_of(scene: &Scene, t: TemperedIntegrator, mpp: u32) -> (f64, Vec<f32>) {
+    const SEEDS: [u64; 4] = [5, 6, 7, 8];
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     let t = TemperedIntegrator { bootstrap: 20_000, chains: 8, ..t };
-    let settings = RenderSettings { budget: Budget::Samples(mpp), seed: 5, threads: 0 };
-    let out = t.render(scene, &settings, &control).unwrap();
-    let d = &out.chains[2];
-    (d.swaps.as_ref().unwrap().neighbor_acceptance(), d.ladder.clone())
+    let (mut acceptance, mut ladder) = (0.0, vec![0.0f32; t.replicas]);
+    for seed in SEEDS {
+        let settings = RenderSettings { budget: Budget::Samples(mpp), seed, threads: 0 };
+        let out = t.render(scene, &settings, &control).unwrap();
+        let d = &out.chains[2];
+        acceptance += d.swaps.as_ref().unwrap().neighbor_acceptance() / SEEDS.len() as f64;
+        ladder.iter_mut().zip(&d.ladder).for_each(|(m, a)| *m += a / SEEDS.len() as f32);
+    }
+    (acceptance, ladder)
 }
 
 /// Neighbour acceptance at depth 2 and the ladder after `burn_in` tuning sweeps.
