@@ -100,6 +100,22 @@ impl BoxRay {
     }
 }
 
+/// Asks the cache for both lines of node `i` ahead of its visit. A prefetch is a hint: it reads
+/// nothing the program sees and cannot fault, so results are unchanged.
+#[inline(always)]
+fn prefetch(nodes: &[Node], i: u32) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(node) = nodes.get(i as usize) {
+        use core::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let p = std::ptr::from_ref(node).cast::<i8>();
+        // SAFETY: `p` and `p + 64` lie within `node` (128 bytes); a prefetch never faults.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(p);
+            _mm_prefetch::<_MM_HINT_T0>(p.add(64));
+        }
+    }
+}
+
 /// The tree. An empty tree has no nodes.
 #[derive(Clone, Debug, Default)]
 pub struct Wide {
@@ -187,7 +203,12 @@ impl Wide {
             if item.count == 0 {
                 let node = &nodes[item.child as usize];
                 let (t, mut mask) = ray.test(node, t_max);
-                let slot = |i: usize| Item { child: node.child[i], count: node.count[i], t: t[i] };
+                let slot = |i: usize| {
+                    if node.count[i] == 0 {
+                        prefetch(nodes, node.child[i]);
+                    }
+                    Item { child: node.child[i], count: node.count[i], t: t[i] }
+                };
                 // The hit children, nearest first (the lower slot first at equal distances);
                 // the nearest is visited next, the others pushed farthest first.
                 match mask.count_ones() {
@@ -266,6 +287,7 @@ impl Wide {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 if n.count[i] == 0 {
+                    prefetch(nodes, n.child[i]);
                     stack.push(Item { child: n.child[i], count: 0, t: 0.0 });
                 } else if (n.child[i]..n.child[i] + n.count[i]).any(&mut blocks) {
                     return true;
