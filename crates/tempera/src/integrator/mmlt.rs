@@ -127,11 +127,35 @@ impl Integrator for MmltIntegrator {
     fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {
         use crate::integrator::memory::{SHARED_SPLAT_BYTES, pixels};
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
-        pixels(scene).saturating_mul(12 + images + (u64::from(self.max_depth) + 1) * SHARED_SPLAT_BYTES)
+        let depths = u64::from(self.max_depth) + 1;
+        pixels(scene)
+            .saturating_mul(12 + images + depths * SHARED_SPLAT_BYTES)
+            .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
     }
 }
 
 /// The names of the per-depth images of a Markov-chain render (none unless asked for).
 pub(crate) fn depth_image_names(wanted: bool, max_depth: u32) -> Vec<String> {
     if wanted { (0..=max_depth).map(|k| format!("depth{k}")).collect() } else { Vec::new() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The estimate counts the table of every bootstrap sample's value at every depth, which
+    /// the depths' shared bootstrap holds at once (here far more than the 1×1 film's buffers).
+    #[test]
+    fn the_memory_estimate_counts_the_shared_bootstrap() {
+        let mut scene = crate::scenes::default_scene().build().unwrap();
+        scene.set_resolution(1, 1);
+        let mmlt = MmltIntegrator { bootstrap: 1_000_000, ..MmltIntegrator::new(999) };
+        let table = 1_000_000 * 1000 * std::mem::size_of::<crate::mcmc::GroupValue>() as u64;
+        assert!(mmlt.memory_estimate(&scene, 1) >= table);
+        let tempered = crate::integrator::TemperedIntegrator {
+            bootstrap: 1_000_000,
+            ..crate::integrator::TemperedIntegrator::new(999)
+        };
+        assert!(tempered.memory_estimate(&scene, 1) >= table);
+    }
 }

@@ -63,6 +63,14 @@ pub fn normaliser_samples(bootstrap: usize) -> usize {
     bootstrap.div_ceil(4)
 }
 
+/// The memory [`Bootstrap::run_groups`] takes for `bootstrap` samples of `groups` groups at
+/// its peak: every sample's values under every group, and one group's column of them.
+pub fn shared_bootstrap_bytes(bootstrap: usize, groups: usize) -> u64 {
+    let value = std::mem::size_of::<GroupValue>() as u64;
+    let row = std::mem::size_of::<(Vec<GroupValue>, u64)>() as u64;
+    (bootstrap as u64).saturating_mul((groups as u64 + 1).saturating_mul(value).saturating_add(row))
+}
+
 /// Folds of the cross-fitted normalisation ([`Bootstrap::normalisation`]).
 pub const FOLDS: usize = 8;
 

@@ -17,7 +17,7 @@ pub mod stats;
 pub mod strategy;
 pub mod tempered;
 
-pub use bootstrap::{Bootstrap, sampler_for};
+pub use bootstrap::{Bootstrap, sampler_for, shared_bootstrap_bytes};
 pub use chain::{Chain, EvalContext, GroupValue, State, Target, target_value};
 pub use driver::{ChainSettings, GroupContext, Layers, OneLayer, Single, StartContext, Walker};
 pub use full::{FullContribution, evaluate_full};

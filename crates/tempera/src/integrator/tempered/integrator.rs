@@ -245,6 +245,9 @@ impl Integrator for TemperedIntegrator {
         use crate::integrator::memory::{SHARED_SPLAT_BYTES, pixels};
         let layers = if self.reuse_replicas && self.swap != Swap::Mixture { self.replicas.max(1) } else { 1 } as u64;
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
-        pixels(scene).saturating_mul(12 + images + (u64::from(self.max_depth) + 1) * layers * SHARED_SPLAT_BYTES)
+        let depths = u64::from(self.max_depth) + 1;
+        pixels(scene)
+            .saturating_mul(12 + images + depths * layers * SHARED_SPLAT_BYTES)
+            .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
     }
 }
