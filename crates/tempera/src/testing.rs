@@ -192,3 +192,29 @@ pub fn assert_same_mean(name: &str, a: &crate::mcmc::Moments, b: &crate::mcmc::M
     assert!((ma - mb).abs() < 4.0 * sigma, "{name}: {ma} ± {ea} vs {mb} ± {eb}");
     (ea, eb)
 }
+
+/// A Cornell box filled with a scattering, absorbing, chromatic medium: every surface has it
+/// on both sides and the camera sits in it, so light subpaths start in it too.
+pub fn foggy_cornell_box(size: u32) -> crate::scene::Scene {
+    use crate::math::Rgb;
+    use crate::medium::{Medium, MediumInterface};
+    let mut b = crate::scenes::cornell_box(size, size);
+    let m = b.add_medium(Medium { sigma_a: Rgb::splat(0.15), sigma_s: Rgb::new(0.6, 0.45, 0.3), g: 0.4 });
+    for shape in 0..b.shape_count() {
+        b.set_shape_medium(shape, MediumInterface { inside: Some(m), outside: Some(m) });
+    }
+    b.set_camera_medium(Some(m));
+    b.build().unwrap()
+}
+
+/// A Cornell box of `size`² pixels seen through a thin lens of `lens_radius` focused at 1.5
+/// (the boxes far out of focus; a pinhole at radius 0).
+pub fn thin_lens_cornell_box(size: u32, lens_radius: f32) -> crate::scene::Scene {
+    let mut b = crate::scenes::cornell_box(size, size);
+    let mut camera =
+        crate::camera::CameraDesc::look_at(Vec3::new(0.0, 1.0, 3.9), Vec3::new(0.0, 1.0, 0.0), Vec3::Y, 38.0);
+    camera.lens_radius = lens_radius;
+    camera.focal_distance = 1.5;
+    b.set_camera(camera);
+    b.build().unwrap()
+}

@@ -208,19 +208,7 @@ fn pssmlt_is_bit_identical_at_any_thread_count() {
 /// sample that went unused would show.
 #[test]
 fn bidirectional_and_markov_chain_integrators_agree_through_a_thin_lens() {
-    let scene = |lens_radius: f32| {
-        let mut b = crate::scenes::cornell_box(32, 32);
-        let mut camera = crate::camera::CameraDesc::look_at(
-            crate::math::Vec3::new(0.0, 1.0, 3.9),
-            crate::math::Vec3::new(0.0, 1.0, 0.0),
-            crate::math::Vec3::Y,
-            38.0,
-        );
-        camera.lens_radius = lens_radius;
-        camera.focal_distance = 1.5;
-        b.set_camera(camera);
-        b.build().unwrap()
-    };
+    let scene = |lens_radius| crate::testing::thin_lens_cornell_box(32, lens_radius);
     let (lens, pinhole) = (scene(0.25), scene(0.0));
     assert!(lens.camera.has_lens() && !pinhole.camera.has_lens());
     let path = render_with(&lens, &PathIntegrator::new(5), Budget::Samples(1024), 1, 0);

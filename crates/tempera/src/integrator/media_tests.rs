@@ -121,18 +121,6 @@ fn next_event_estimation_through_media_agrees_with_sampling_alone() {
     assert_eq!(nee.stats.invalid_samples, 0);
 }
 
-/// A Cornell box filled with a scattering, absorbing, chromatic medium: every surface has it
-/// on both sides and the camera sits in it, so light subpaths start in it too.
-fn foggy_cornell_box(size: u32) -> crate::scene::Scene {
-    let mut b = crate::scenes::cornell_box(size, size);
-    let m = b.add_medium(Medium { sigma_a: Rgb::splat(0.15), sigma_s: Rgb::new(0.6, 0.45, 0.3), g: 0.4 });
-    for shape in 0..b.shape_count() {
-        b.set_shape_medium(shape, MediumInterface { inside: Some(m), outside: Some(m) });
-    }
-    b.set_camera_medium(Some(m));
-    b.build().unwrap()
-}
-
 /// BDPT through media: the absorbing slab's analytic transmittance (every strategy, through
 /// two interface surfaces), and radiance 1 inside a non-absorbing medium under a uniform sky
 /// (light subpaths from the sky enter the medium through its boundary).
@@ -150,7 +138,7 @@ fn bdpt_transmits_the_slab_analytically_and_keeps_the_sky_in_a_non_absorbing_med
 /// light-tracing strategy alone (medium vertices connected to the lens).
 #[test]
 fn bdpt_agrees_with_the_path_tracer_in_a_scattering_medium() {
-    let scene = foggy_cornell_box(24);
+    let scene = crate::testing::foggy_cornell_box(24);
     let path = render_with(&scene, &PathIntegrator::new(6), Budget::Samples(512), 11, 0);
     let bdpt = render_with(&scene, &BdptIntegrator::new(6), Budget::Samples(128), 12, 0);
     assert_eq!(bdpt.stats.invalid_samples, 0);
@@ -167,7 +155,7 @@ fn bdpt_agrees_with_the_path_tracer_in_a_scattering_medium() {
 /// here, MMLT's by a few tenths of a percent.
 #[test]
 fn markov_chain_integrators_agree_with_bdpt_in_a_scattering_medium() {
-    let scene = foggy_cornell_box(16);
+    let scene = crate::testing::foggy_cornell_box(16);
     let bdpt = render_with(&scene, &BdptIntegrator::new(6), Budget::Samples(512), 21, 0);
     let reference = super::tests::block_stats(&bdpt.image, 8);
     let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;

@@ -107,8 +107,7 @@ pub fn each_strategy_of(
     sampler.start_stream(Stream::Camera);
     let film = sampler.next_2d();
     let lens = scene.camera.lens_sample(sampler);
-    let (w, h) = (scene.film.width as f32, scene.film.height as f32);
-    let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
+    let raster = super::strategy::raster_position(scene, film);
     let ray = scene.camera.generate_ray(raster, lens);
     rays += 1;
     camera_subpath_vertices(scene, ray, sampler, deepest + 2, &mut paths.camera, &mut rays);

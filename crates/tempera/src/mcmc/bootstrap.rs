@@ -44,15 +44,26 @@ impl<S: State> Default for Scratch<S> {
 
 impl<S: State> Scratch<S> {
     /// Evaluates the state `sampler` holds under `target`; returns it and the rays traced.
-    pub fn evaluate(&mut self, target: &impl Target<State = S>, mut sampler: PssSampler) -> (&mut S, u64) {
+    pub fn evaluate(&mut self, target: &impl Target<State = S>, sampler: PssSampler) -> (&mut S, u64) {
+        let mut cx = self.lend(sampler);
+        self.state = target.evaluate(&mut cx, std::mem::take(&mut self.state));
+        let rays = self.take_back(cx);
+        (&mut self.state, rays)
+    }
+
+    /// A context for evaluating the state `sampler` holds, with this scratch's storage.
+    fn lend(&mut self, mut sampler: PssSampler) -> EvalContext {
         if let Some(spare) = self.spare.take() {
             sampler.reuse_storage(spare);
         }
-        let mut cx = EvalContext { sampler, paths: std::mem::take(&mut self.paths), rays: 0 };
-        self.state = target.evaluate(&mut cx, std::mem::take(&mut self.state));
+        EvalContext { sampler, paths: std::mem::take(&mut self.paths), rays: 0 }
+    }
+
+    /// Keeps the storage of a context [`Self::lend`] gave; returns the rays it traced.
+    fn take_back(&mut self, cx: EvalContext) -> u64 {
         self.paths = cx.paths;
         self.spare = Some(cx.sampler);
-        (&mut self.state, cx.rays)
+        cx.rays
     }
 }
 
@@ -123,18 +134,10 @@ impl Bootstrap {
         let per_sample: Vec<(Vec<GroupValue>, u64)> = (0..settings.bootstrap)
             .into_par_iter()
             .map_init(Scratch::<T::State>::default, |scratch, i| {
-                let mut cx = EvalContext {
-                    sampler: sampler_for(seed, 0, i, settings),
-                    paths: std::mem::take(&mut scratch.paths),
-                    rays: 0,
-                };
-                if let Some(spare) = scratch.spare.take() {
-                    cx.sampler.reuse_storage(spare);
-                }
+                let mut cx = scratch.lend(sampler_for(seed, 0, i, settings));
                 let mut out = Vec::with_capacity(groups);
                 let rays = target.value_groups(&mut cx, groups, &mut out);
-                scratch.paths = cx.paths;
-                scratch.spare = Some(cx.sampler);
+                scratch.take_back(cx);
                 (out, rays)
             })
             .collect();

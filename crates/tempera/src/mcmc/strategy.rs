@@ -70,6 +70,12 @@ pub struct Evaluated {
     pub connection: Option<Connection>,
 }
 
+/// The raster position of the film sample `u` (each coordinate kept inside the film).
+pub(crate) fn raster_position(scene: &Scene, u: Vec2) -> Vec2 {
+    let (w, h) = (scene.film.width as f32, scene.film.height as f32);
+    Vec2::new((u.x * w).min(w - 1e-3), (u.y * h).min(h - 1e-3))
+}
+
 /// The technique `(s, t)` of depth `k` that camera-stream number `u` chooses, and the number
 /// of the depth's strategies.
 fn technique(k: usize, u: f32) -> (usize, usize, usize) {
@@ -85,9 +91,7 @@ pub fn evaluate_connection(scene: &Scene, k: usize, cx: &mut EvalContext, paths:
     let (sampler, rays) = (&mut cx.sampler, &mut cx.rays);
     sampler.start_stream(Stream::Camera);
     let (s, t, n) = technique(k, sampler.next_1d());
-    let film = sampler.next_2d();
-    let (w, h) = (scene.film.width as f32, scene.film.height as f32);
-    let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
+    let raster = raster_position(scene, sampler.next_2d());
     let none = Evaluated { s, t, n, raster, connection: None };
     paths.camera.clear();
     if t > 1 {
@@ -159,12 +163,10 @@ pub fn evaluate_depths(scene: &Scene, depths: usize, cx: &mut EvalContext, out: 
     let start = *rays;
     sampler.start_stream(Stream::Camera);
     let u = sampler.next_1d();
-    let film = sampler.next_2d();
-    let (w, h) = (scene.film.width as f32, scene.film.height as f32);
-    let raster = Vec2::new((film.x * w).min(w - 1e-3), (film.y * h).min(h - 1e-3));
-    let techniques: Vec<(usize, usize, usize)> = (0..depths).map(|k| technique(k, u)).collect();
-    let t_max = techniques.iter().map(|&(_, t, _)| t).max().unwrap_or(0);
-    let s_max = techniques.iter().map(|&(s, _, _)| s).max().unwrap_or(0);
+    let raster = raster_position(scene, sampler.next_2d());
+    let techniques = (0..depths).map(|k| technique(k, u));
+    let t_max = techniques.clone().map(|(_, t, _)| t).max().unwrap_or(0);
+    let s_max = techniques.clone().map(|(s, _, _)| s).max().unwrap_or(0);
     paths.camera.clear();
     let mut camera_rays = 0;
     if t_max > 1 {
@@ -181,7 +183,7 @@ pub fn evaluate_depths(scene: &Scene, depths: usize, cx: &mut EvalContext, out: 
     // The rays a walk of `len` vertices (of the first `traced` rays in all) spends on a prefix of
     // `n` vertices.
     let prefix_rays = |n: usize, len: usize, traced: u64| if n > len { traced } else { traced.min(n as u64 - 1) };
-    for &(s, t, n) in &techniques {
+    for (s, t, n) in techniques {
         let mut own = 0;
         let camera_built = t <= 1 || paths.camera.len() >= t;
         if t > 1 {
@@ -195,8 +197,9 @@ pub fn evaluate_depths(scene: &Scene, depths: usize, cx: &mut EvalContext, out: 
         }
         let none = Evaluated { s, t, n, raster, connection: None };
         let e = if camera_built && (s <= 1 || paths.light.len() >= s) {
-            let (light, camera) =
-                (&paths.light[..s.min(paths.light.len())], &paths.camera[..t.min(paths.camera.len())]);
+            // The subpaths the depth's own evaluation builds: none for `s ≤ 1` or `t ≤ 1`.
+            let light = if s > 1 { &paths.light[..s] } else { &[] };
+            let camera = if t > 1 { &paths.camera[..t] } else { &[] };
             let before = *rays;
             let connection = connect(scene, Subpaths { light, camera }, (s, t), sampler, Heuristic::Power, rays);
             own += *rays - before;
@@ -224,9 +227,7 @@ pub fn evaluate(scene: &Scene, k: usize, cx: &mut EvalContext) -> Contribution {
 mod tests {
     use super::*;
     use crate::bidir::Tempering;
-    use crate::math::Vec3;
     use crate::mcmc::{ChainSettings, Target, TemperedTarget, sampler_for};
-    use crate::medium::{Medium, MediumInterface};
 
     /// Every depth's value of a bootstrap sample, valued at all depths from one pair of
     /// subpaths, is bit for bit the value its own evaluation gives, with the rays that
@@ -234,24 +235,13 @@ mod tests {
     /// a Cornell box seen through a thin lens, and one filled with a scattering medium.
     #[test]
     fn depths_valued_together_equal_each_depth_valued_alone() {
-        let default = crate::scenes::default_scene();
-        let mut lens = crate::scenes::cornell_box(16, 16);
-        let mut camera =
-            crate::camera::CameraDesc::look_at(Vec3::new(0.0, 1.0, 3.9), Vec3::new(0.0, 1.0, 0.0), Vec3::Y, 38.0);
-        camera.lens_radius = 0.25;
-        camera.focal_distance = 1.5;
-        lens.set_camera(camera);
-        let mut fog = crate::scenes::cornell_box(16, 16);
-        let m = fog.add_medium(Medium { sigma_a: Rgb::splat(0.15), sigma_s: Rgb::new(0.6, 0.45, 0.3), g: 0.4 });
-        for shape in 0..fog.shape_count() {
-            fog.set_shape_medium(shape, MediumInterface { inside: Some(m), outside: Some(m) });
-        }
-        fog.set_camera_medium(Some(m));
+        let mut default = crate::scenes::default_scene().build().unwrap();
+        default.set_resolution(16, 16);
+        let lens = crate::testing::thin_lens_cornell_box(16, 0.25);
+        let fog = crate::testing::foggy_cornell_box(16);
         let settings = ChainSettings::new(0, 0, 0.01, 0.3);
         let depths = 9;
-        for (name, builder) in [("default", default), ("thin lens", lens), ("fog", fog)] {
-            let mut scene = builder.build().unwrap();
-            scene.set_resolution(16, 16);
+        for (name, scene) in [("default", default), ("thin lens", lens), ("fog", fog)] {
             let mut nonzero = vec![0; depths];
             let (mut out, mut main_out) = (Vec::new(), Vec::new());
             let temper = Tempering { a: 0.0, heuristic: Heuristic::Power, roughen_mis: false };
