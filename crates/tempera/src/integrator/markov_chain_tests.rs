@@ -27,6 +27,17 @@ fn mmlt_agrees_with_bdpt_on_a_cornell_box() {
     }
     assert!(mmlt.chains.iter().all(|d| d.invalid == 0));
     assert!(mmlt.chains[1].b_rel_se < 0.02, "b_1 is pinned down: {:?}", mmlt.chains[1]);
+    // The chains are at equilibrium: their large steps are accepted as often as the bootstrap
+    // predicts for the target (an estimator that ignored the bright states' share, or chains
+    // started off their target, would miss it).
+    let mut compared = 0;
+    for d in mmlt.chains.iter().filter(|d| d.large_steps_proposed >= 20_000) {
+        let realised = d.large_steps_accepted as f64 / d.large_steps_proposed as f64;
+        let estimate = d.large_step_estimate;
+        assert!((realised - estimate).abs() < 0.08 * estimate + 0.005, "depth {}: {realised} vs {estimate}", d.depth);
+        compared += 1;
+    }
+    assert!(compared >= 3, "{:?}", mmlt.chains);
 }
 
 #[test]

@@ -100,6 +100,10 @@ pub struct DepthRecord {
     /// Non-zero values among the bootstrap samples.
     #[serde(default)]
     pub bootstrap_nonzero: u64,
+    /// The large-step acceptance the bootstrap predicts for the depth's chains (compare with
+    /// `acceptance.large_step`, the realised one).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub large_step_estimate: f64,
     /// The depth was sampled independently (bidirectional path tracing restricted to it)
     /// instead of by chains: its bootstrap had too few non-zero values to start them apart.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
@@ -197,6 +201,7 @@ impl DepthRecord {
             bootstrap_samples: d.bootstrap_samples,
             large_step_samples: d.large_step_samples,
             bootstrap_nonzero: d.bootstrap_nonzero,
+            large_step_estimate: d.large_step_estimate,
             independent: d.independent,
             spread: d.spread,
             mutations: d.mutations,

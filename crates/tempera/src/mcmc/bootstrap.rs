@@ -282,6 +282,12 @@ impl Bootstrap {
         (sum2 * n as f64 / (sum * sum)).sqrt().clamp(1.0, 8.0)
     }
 
+    /// The acceptance a chain's large steps will have at equilibrium, estimated from the
+    /// values ([`large_step_acceptance`]).
+    pub fn large_step_acceptance(&self) -> f64 {
+        large_step_acceptance(&self.values)
+    }
+
     /// How many of the values are non-zero.
     pub fn nonzero(&self) -> u64 {
         self.values.iter().filter(|&&v| v > 0.0).count() as u64
@@ -306,6 +312,28 @@ impl Bootstrap {
 fn clamp_threshold(values: &[f32], factor: f64) -> f32 {
     let Moments { sum, n, .. } = nonzero_moments(values);
     if n == 0 { f32::INFINITY } else { (factor * sum / n as f64) as f32 }
+}
+
+/// The equilibrium acceptance of independent proposals drawn uniformly in primary sample
+/// space (a chain's large steps) for a target whose values at uniform samples are `values`:
+/// with `x` distributed as the target and `y` uniform, `E[min(1, f(y)/f(x))]`, which is
+/// `E[min(f(x), f(y))] / E[f]` with both `x` and `y` uniform. Estimated by the U-statistic over
+/// all pairs of distinct samples (`Σ_{i<j} min(f_i, f_j)` is `Σ_r f_(r) (n − 1 − r)` over the
+/// values sorted in ascending order); 0 where no value is positive.
+pub fn large_step_acceptance(values: &[f32]) -> f64 {
+    let mut sorted: Vec<f64> = values.iter().filter(|&&v| v > 0.0).map(|&v| f64::from(v)).collect();
+    let n = values.len() as f64;
+    let sum: f64 = sorted.iter().sum();
+    if sum <= 0.0 || values.len() < 2 {
+        return 0.0;
+    }
+    sorted.sort_by(f64::total_cmp);
+    // The zeros sort first and add nothing; the r-th smallest positive value is the smaller
+    // of its pairs with every value above it.
+    let above = |r: usize| (sorted.len() - 1 - r) as f64;
+    let pairs: f64 = sorted.iter().enumerate().map(|(r, &v)| v * above(r)).sum();
+    let mean_min = 2.0 * pairs / (n * (n - 1.0));
+    (mean_min / (sum / n)).min(1.0)
 }
 
 /// The moments of the non-zero values among `values`.
@@ -445,5 +473,26 @@ mod tests {
         let (mean, rel) = measured.mean_and_rel_se();
         assert!((mean - truth).abs() < 4.0 * mean * rel, "measured variance: {mean} ± {} vs {truth}", mean * rel);
         assert!(se_measured < 0.8 * se_own, "squared errors: {se_measured} (measured) vs {se_own} (own)");
+    }
+
+    /// The estimated large-step acceptance matches closed forms: a target that is 1 on a
+    /// fraction `p` of the space and 0 elsewhere accepts a proposal exactly when it lands in
+    /// that fraction (`p`); one uniform on `[0, 1]` accepts `E[min(X, Y)] / E[X] = 2/3`; and a
+    /// constant target accepts every proposal.
+    #[test]
+    fn large_step_acceptance_matches_closed_forms() {
+        let n = 20_000;
+        let indicator: Vec<f32> = (0..n).map(|i| if i % 50 < 3 { 2.5 } else { 0.0 }).collect();
+        assert!((large_step_acceptance(&indicator) - 0.06).abs() < 1e-4, "{}", large_step_acceptance(&indicator));
+        let mut rng = Pcg32::new(7, 1);
+        let uniform: Vec<f32> = (0..n).map(|_| rng.next_f64() as f32).collect();
+        let a = large_step_acceptance(&uniform);
+        assert!((a - 2.0 / 3.0).abs() < 0.01, "{a}");
+        assert!((large_step_acceptance(&[0.3; 100]) - 1.0).abs() < 1e-12);
+        assert_eq!(large_step_acceptance(&[0.0; 100]), 0.0);
+        // A rare bright value lowers it: most proposals fall from the bright state.
+        let mut spiked = uniform.clone();
+        spiked[0] = 1e6;
+        assert!(large_step_acceptance(&spiked) < 0.05, "{}", large_step_acceptance(&spiked));
     }
 }

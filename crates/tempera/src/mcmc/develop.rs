@@ -135,6 +135,7 @@ pub(super) fn develop<L: Layers>(
         d.bootstrap_samples = boot.values.len() as u64;
         d.spread = boot.spread();
         d.bootstrap_nonzero = boot.nonzero();
+        d.large_step_estimate = boot.large_step_acceptance();
         d.large_step_samples = large[k][0].n;
         d.invalid += boot.invalid;
         let Some(group) = &groups[k] else {

@@ -41,6 +41,9 @@ pub struct DepthStats {
     pub replica_b: Vec<f64>,
     /// Non-zero values among the bootstrap's samples.
     pub bootstrap_nonzero: u64,
+    /// The large-step acceptance the bootstrap predicts for the depth's chains at equilibrium
+    /// ([`super::bootstrap::large_step_acceptance`]).
+    pub large_step_estimate: f64,
     /// The depth was sampled independently instead of by chains (its bootstrap had too few
     /// non-zero values to start them apart; see [`super::independent`]): `mutations` counts
     /// the samples drawn in its share of the budget, each of which covers every strategy of
@@ -81,7 +84,7 @@ impl DepthStats {
         for &b in &self.replica_b {
             w.f64(b);
         }
-        w.u64(self.bootstrap_nonzero).u64(u64::from(self.independent));
+        w.u64(self.bootstrap_nonzero).u64(u64::from(self.independent)).f64(self.large_step_estimate);
     }
 
     /// Statistics [`Self::encode`] wrote.
@@ -129,6 +132,7 @@ impl DepthStats {
         d.replica_b = (0..r.u64()).map(|_| r.f64()).collect();
         d.bootstrap_nonzero = r.u64();
         d.independent = r.u64() != 0;
+        d.large_step_estimate = r.f64();
         d
     }
 
