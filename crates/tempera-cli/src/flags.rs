@@ -48,6 +48,16 @@ pub struct IntegratorFlags {
     /// own pixels instead of on its depth's normalisation (default 0: never)
     #[arg(long, value_name = "F")]
     pub target_clamp: Option<f64>,
+    /// MMLT: R samples of bidirectional path tracing per main-chain mutation, combined with
+    /// the chains by multiple importance sampling: the samples carry the dim parts of the
+    /// image, the chains the bright, hard-to-find paths (default 0: the chains alone)
+    #[arg(long, value_name = "R")]
+    pub hybrid: Option<f64>,
+    /// MMLT and tempered MMLT with --hybrid: what a main-chain mutation counts as, in
+    /// independent samples at the same density, in the combination's weights (default 0.01:
+    /// a chain's successive states are correlated)
+    #[arg(long, value_name = "E")]
+    pub chain_efficiency: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long)]
     pub replicas: Option<usize>,
@@ -157,6 +167,8 @@ impl IntegratorFlags {
             independent_below: self.independent_below,
             normaliser_share: self.normaliser_share,
             target_clamp: self.target_clamp,
+            hybrid: self.hybrid,
+            chain_efficiency: self.chain_efficiency,
             replicas: self.replicas,
             swap: self.swap,
             ladder: self.ladder.clone(),

@@ -35,6 +35,12 @@ pub struct MmltIntegrator {
     /// non-zero values, splatting a clamped state's whole contribution over the clamped value
     /// ([`crate::mcmc::Chain::start_clamped`]); 0 (the default, MMLT as published): never.
     pub target_clamp: f64,
+    /// Samples of bidirectional path tracing per main-chain mutation, combined with the chains
+    /// by multiple importance sampling ([`crate::mcmc::hybrid`]); 0 (the default, MMLT as
+    /// published): the chains alone.
+    pub hybrid: f64,
+    /// What a main-chain mutation counts as in the weights of [`Self::hybrid`]'s combination.
+    pub chain_efficiency: f64,
 }
 
 impl MmltIntegrator {
@@ -50,6 +56,8 @@ impl MmltIntegrator {
             independent_below: 0,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
             target_clamp: 0.0,
+            hybrid: 0.0,
+            chain_efficiency: crate::mcmc::hybrid::DEFAULT_EFFICIENCY,
         }
     }
 }
@@ -80,6 +88,10 @@ impl Target for DepthTarget<'_> {
 
     fn independent_depth(&self) -> Option<usize> {
         (self.depth >= 1).then_some(self.depth)
+    }
+
+    fn hybrid_depth(&self) -> Option<usize> {
+        Some(self.depth)
     }
 
     /// Every depth's bootstrap sample `i` is one primary-sample-space point, valued at all
@@ -116,7 +128,9 @@ impl Integrator for MmltIntegrator {
             .with_group_images(self.depth_images)
             .with_independent_below(self.independent_below)
             .with_normaliser_share(self.normaliser_share)
-            .with_clamp(self.target_clamp);
+            .with_clamp(self.target_clamp)
+            .with_hybrid(self.hybrid)
+            .with_chain_efficiency(self.chain_efficiency);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.group.k;
@@ -128,8 +142,9 @@ impl Integrator for MmltIntegrator {
         use crate::integrator::memory::{SHARED_SPLAT_BYTES, pixels};
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
         let depths = u64::from(self.max_depth) + 1;
+        let hybrid = crate::mcmc::hybrid::film_buffers(self.hybrid, self.depth_images, depths);
         pixels(scene)
-            .saturating_mul(12 + images + depths * SHARED_SPLAT_BYTES)
+            .saturating_mul(12 + images + (depths + hybrid) * SHARED_SPLAT_BYTES)
             .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
     }
 }

@@ -108,6 +108,10 @@ pub struct DepthRecord {
     /// instead of by chains: its bootstrap had too few non-zero values to start them apart.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub independent: bool,
+    /// Samples of bidirectional path tracing combined with the chains (`--hybrid`), each
+    /// covering every depth; all are counted in depth 0's row.
+    #[serde(default, skip_serializing_if = "is_zero_u64")]
+    pub hybrid_samples: u64,
     /// How unevenly the depth's light is spread over its paths: `sqrt(E[f²]/E[f]²)` over the
     /// bootstrap's non-zero values, capped at 8 (mutations may be allotted by `b` times it).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -159,6 +163,10 @@ fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
 
+fn is_zero_u64(v: &u64) -> bool {
+    *v == 0
+}
+
 fn rate(accepted: u64, proposed: u64) -> f64 {
     if proposed == 0 { 0.0 } else { accepted as f64 / proposed as f64 }
 }
@@ -203,6 +211,7 @@ impl DepthRecord {
             bootstrap_nonzero: d.bootstrap_nonzero,
             large_step_estimate: d.large_step_estimate,
             independent: d.independent,
+            hybrid_samples: d.hybrid_samples,
             spread: d.spread,
             mutations: d.mutations,
             acceptance: Acceptance {

@@ -172,6 +172,14 @@ pub struct IntegratorSettings {
     /// non-zero values (0: never).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_clamp: Option<f64>,
+    /// MMLT: samples of bidirectional path tracing per main-chain mutation, combined with the
+    /// chains by multiple importance sampling (0: the chains alone).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hybrid: Option<f64>,
+    /// MMLT and tempered MMLT with `hybrid`: what a main-chain mutation counts as, in
+    /// independent samples at the same density, in the weights of the combination.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub chain_efficiency: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
@@ -287,6 +295,8 @@ impl IntegratorSettings {
             ("independent_below", self.independent_below.is_some(), kind == Mmlt || tempered),
             ("normaliser_share", self.normaliser_share.is_some(), kind == Mmlt || tempered),
             ("target_clamp", self.target_clamp.is_some(), kind == Mmlt),
+            ("hybrid", self.hybrid.is_some(), kind == Mmlt || tempered),
+            ("chain_efficiency", self.chain_efficiency.is_some(), kind == Mmlt || tempered),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
@@ -354,6 +364,12 @@ impl IntegratorSettings {
         check_probability("collapse_above", self.collapse_above)?;
         check_probability("collapse_below", self.collapse_below)?;
         check_range("normaliser_share", self.normaliser_share, 0.0..=1.0)?;
+        if self.hybrid.is_some_and(|r| !(0.0..=100.0).contains(&r)) {
+            return Err("hybrid must be between 0 and 100 samples per mutation".into());
+        }
+        if self.chain_efficiency.is_some_and(|e| !(e > 0.0 && e <= 100.0)) {
+            return Err("chain_efficiency must be above 0 and at most 100".into());
+        }
         if self.target_clamp.is_some_and(|c| !(c == 0.0 || (1.0..=1e9).contains(&c))) {
             return Err("target_clamp must be 0 (never) or between 1 and 1e9".into());
         }
@@ -441,6 +457,8 @@ pub fn create(
                 independent_below: s.independent_below.unwrap_or(m.independent_below),
                 normaliser_share: s.normaliser_share.unwrap_or(m.normaliser_share),
                 target_clamp: s.target_clamp.unwrap_or(m.target_clamp),
+                hybrid: s.hybrid.unwrap_or(m.hybrid),
+                chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
                 depth_images: s.depth_images,
                 ..m
             })
@@ -481,6 +499,8 @@ pub fn create(
                 hot_every: s.hot_every.unwrap_or(m.hot_every),
                 hot_large_step: s.hot_large_step.or(m.hot_large_step),
                 hot_weight: s.hot_weight.unwrap_or(m.hot_weight),
+                hybrid: s.hybrid.unwrap_or(m.hybrid),
+                chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
                 depth_images: s.depth_images,
                 ..m
             })

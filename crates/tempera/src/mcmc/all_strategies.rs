@@ -102,10 +102,25 @@ pub fn each_strategy_of(
     paths: &mut Paths,
     mut splat: impl FnMut(usize, Vec2, Rgb),
 ) -> u64 {
-    let mut rays = 0;
-    let deepest = depths.iter().copied().max().unwrap_or(0);
     sampler.start_stream(Stream::Camera);
     let film = sampler.next_2d();
+    each_strategy_from(scene, depths, film, sampler, paths, |i, p, l, _| splat(i, p, l))
+}
+
+/// [`each_strategy_of`] from the film position `film` (in `[0, 1)²`), once the sampler's
+/// camera stream has started and given the film sample: `splat` is also told whether a
+/// contribution is light tracing's (`t = 1`), splatted where the light path reached the film
+/// rather than at the camera ray's position.
+pub fn each_strategy_from(
+    scene: &Scene,
+    depths: &[usize],
+    film: Vec2,
+    sampler: &mut IndependentSampler,
+    paths: &mut Paths,
+    mut splat: impl FnMut(usize, Vec2, Rgb, bool),
+) -> u64 {
+    let mut rays = 0;
+    let deepest = depths.iter().copied().max().unwrap_or(0);
     let lens = scene.camera.lens_sample(sampler);
     let raster = super::strategy::raster_position(scene, film);
     let ray = scene.camera.generate_ray(raster, lens);
@@ -120,7 +135,7 @@ pub fn each_strategy_of(
             };
             let l = c.l * c.weight;
             if valid_radiance(l) {
-                splat(i, c.raster.unwrap_or(raster), l);
+                splat(i, c.raster.unwrap_or(raster), l, t == 1);
             }
         }
     }

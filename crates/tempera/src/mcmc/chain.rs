@@ -64,6 +64,12 @@ pub trait Target {
     fn independent_depth(&self) -> Option<usize> {
         None
     }
+    /// The path depth `k` whose MMLT target (one strategy of the depth's `n`, valued
+    /// `n·w_s·C_s`: [`super::strategy`]) this is, where the chains may be combined with
+    /// bidirectional path tracing ([`super::hybrid`]); `None` for targets of another kind.
+    fn hybrid_depth(&self) -> Option<usize> {
+        None
+    }
     /// Whether [`Self::value_groups`] values a state under the targets of several groups at
     /// once.
     fn values_groups_together(&self) -> bool {
@@ -100,6 +106,11 @@ pub struct Chain<S> {
     proposal: S,
     /// The value at which the target is clamped (infinite: none).
     clamp: f32,
+    /// The level `h` of the independent samples' density in target units where the chain is
+    /// combined with them by multiple importance sampling ([`super::hybrid`]): a state of
+    /// value `f` splats with the balance-heuristic weight `f/(f + h)`, that is `C/(f + h)`
+    /// instead of `C/f`. 0: the chain alone.
+    mis_level: f32,
     pub stats: DepthStats,
     /// The large-step proposals' values.
     pub large: Moments,
@@ -137,6 +148,7 @@ impl<S: State> Chain<S> {
             current,
             proposal: S::default(),
             clamp,
+            mis_level: 0.0,
             stats: DepthStats { depth, ..DepthStats::default() },
             large: Moments::default(),
         }
@@ -155,10 +167,17 @@ impl<S: State> Chain<S> {
     /// Replaces this chain by `fresh`, keeping the count of rays traced by both (and `fresh`'s
     /// clamp).
     pub fn restart(&mut self, fresh: Chain<S>) {
-        let (rays, p) = (self.cx.rays, self.large_step_probability());
+        let (rays, p, h) = (self.cx.rays, self.large_step_probability(), self.mis_level);
         *self = fresh;
         self.cx.rays += rays;
         self.set_large_step_probability(p);
+        self.mis_level = h;
+    }
+
+    /// Combines this chain with independent samples of density level `h` in target units: a
+    /// state of value `f` then splats with the weight `f/(f + h)` (0: the chain alone).
+    pub fn set_mis_level(&mut self, h: f32) {
+        self.mis_level = h;
     }
 
     /// The probability that this chain's proposals are large steps.
@@ -242,12 +261,13 @@ impl<S: State> Chain<S> {
         splats: Option<&SharedSplats>,
         observe: impl FnMut(&mut S),
     ) {
+        let h = self.mis_level;
         self.mutate_splatting(target, observe, |c, weight| {
             if let Some(splats) = splats
                 && weight > 0.0
                 && c.value() > 0.0
             {
-                c.splat(splats, weight / c.value());
+                c.splat(splats, weight / (c.value() + h));
             }
         });
     }

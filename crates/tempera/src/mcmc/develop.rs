@@ -3,6 +3,7 @@
 //! splats scaled to its share of the image.
 
 use super::driver::{Group, Layers, Slot, Walker};
+use super::hybrid::{Hybrid, HybridDepth, HybridFilm};
 use super::independent::Independent;
 use super::{Bootstrap, DepthStats, Moments};
 use crate::cluster::{Cluster, Reader, Wire};
@@ -29,8 +30,7 @@ impl Report {
 /// the walkers other ranks run).
 pub(super) fn local_reports<W: Walker>(
     cluster: &dyn Cluster,
-    walkers: &[W],
-    independents: &[Independent],
+    (walkers, independents, hybrids): (&[W], &[Independent], &[Hybrid]),
     plan: &[Slot],
     groups: &[Option<Group<Option<W::Group>>>],
 ) -> Vec<Report> {
@@ -41,7 +41,12 @@ pub(super) fn local_reports<W: Walker>(
         large: vec![Moments::default()],
         rays: walker.rays(),
     });
-    chains.chain(others).enumerate().map(|(i, r)| if cluster.owns(i) { r } else { Report::default() }).collect()
+    let hybrid = hybrids.iter().map(|walker| Report {
+        stats: DepthStats { hybrid_samples: walker.samples, ..DepthStats::default() },
+        large: vec![Moments::default()],
+        rays: walker.rays(),
+    });
+    chains.chain(others).chain(hybrid).enumerate().map(|(i, r)| if cluster.owns(i) { r } else { Report::default() }).collect()
 }
 
 /// Every walker's report, at rank 0 (each from the rank that runs it); the other ranks get
@@ -69,20 +74,25 @@ pub(super) fn gather_reports(cluster: &dyn Cluster, mut reports: Vec<Report>) ->
     reports
 }
 
+/// Splat buffers summed over the ranks (integer sums, exact).
+pub(super) fn sum_buffers(cluster: &dyn Cluster, buffers: &[SharedSplats]) -> Vec<SharedSplats> {
+    buffers
+        .iter()
+        .map(|b| {
+            let mut values = b.values();
+            cluster.sum(&mut values);
+            SharedSplats::from_values(b.width, b.height, &values)
+        })
+        .collect()
+}
+
 /// Every prepared group's splat buffers summed over the ranks (integer sums, exact).
 pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) -> Vec<Vec<SharedSplats>> {
     groups
         .iter()
         .map(|g| {
             let Some(g) = g else { return Vec::new() };
-            g.splats
-                .iter()
-                .map(|b| {
-                    let mut values = b.values();
-                    cluster.sum(&mut values);
-                    SharedSplats::from_values(b.width, b.height, &values)
-                })
-                .collect()
+            sum_buffers(cluster, &g.splats)
         })
         .collect()
 }
@@ -91,14 +101,16 @@ pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) 
 /// walker order, each layer's normalisation `b_l` refined with the large-step proposals, each
 /// layer's splats (`summed` over the ranks, else the groups' own) scaled to estimate its share
 /// of the image per mutation. Rays count the walkers' rays only. With `group_images`, each
-/// group's share of the image (its layers summed) is also returned, in group order.
+/// group's share of the image (its layers summed) is also returned, in group order. The
+/// independent samples combined with the chains (`hybrid`: their depths and one buffer per
+/// depth, summed over the ranks) add their share ([`super::hybrid`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn develop<L: Layers>(
     boots: &[Bootstrap],
     reports: &[Report],
     plan: &[Slot],
     groups: &[Option<Group<L>>],
-    summed: Option<&[Vec<SharedSplats>]>,
+    (summed, hybrid): (Option<&[Vec<SharedSplats>]>, Option<(&[HybridDepth], &HybridFilm)>),
     (w, h): (u32, u32),
     group_images: bool,
 ) -> RenderOutput {
@@ -183,6 +195,25 @@ pub(super) fn develop<L: Layers>(
         }
         if layer_b.len() > 1 {
             d.replica_b = layer_b;
+        }
+    }
+    // The independent samples' share: each depth's weighted splats over the samples drawn.
+    let hybrid_samples: u64 = stats.iter().map(|d| d.hybrid_samples).sum();
+    if let Some((depths, film)) = hybrid
+        && hybrid_samples > 0
+    {
+        invalid += film.invalid();
+        for l in 0..film.layers() {
+            let layer = film.image(l, hybrid_samples);
+            for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
+                *p += *q;
+            }
+            // With per-group images the film has one layer per depth it covers.
+            if let Some(own) = depths.get(l).and_then(|d| per_group.get_mut(d.k)) {
+                for (p, q) in own.pixels.iter_mut().zip(&layer.pixels) {
+                    *p += *q;
+                }
+            }
         }
     }
     let mutations: u64 = stats.iter().map(|d| d.mutations).sum();

@@ -17,7 +17,8 @@
 //! `N_pixels · b_l/ρ_l / M` (`M` the group's mutations).
 
 use super::bootstrap::{Bootstrap, sampler_for};
-use super::develop::{develop, gather_reports, local_reports, sum_splats};
+use super::develop::{develop, gather_reports, local_reports, sum_buffers, sum_splats};
+use super::hybrid::{Hybrid, HybridDepth, HybridFilm};
 use super::independent::Independent;
 use super::normaliser::Topup;
 use super::{Chain, DepthStats, Moments, Target};
@@ -55,6 +56,12 @@ pub struct ChainSettings {
     /// Clamps each group's target, where it is [`Target::clampable`], at this many times the
     /// mean of its bootstrap's non-zero values ([`Chain::start_clamped`]); 0: never.
     pub clamp: f64,
+    /// Samples of bidirectional path tracing per main-chain mutation, combined with the chains
+    /// by multiple importance sampling ([`super::hybrid`]); 0: the chains alone.
+    pub hybrid: f64,
+    /// What a main-chain mutation counts as in those weights, in independent samples at the
+    /// same density: a chain's successive states are correlated.
+    pub chain_efficiency: f64,
 }
 
 /// How a group's splat layers are normalised, decided when the group is prepared.
@@ -145,6 +152,9 @@ pub struct GroupContext<'a> {
     pub budget: Option<u64>,
     /// The value the group's chains clamp its target at ([`Bootstrap::clamp`]).
     pub clamp: f32,
+    /// The level of the independent samples the group's chains are combined with
+    /// ([`super::hybrid`]; 0: none).
+    pub mis_level: f32,
 }
 
 impl GroupContext<'_> {
@@ -153,7 +163,10 @@ impl GroupContext<'_> {
     /// Markov-chain integrator starts so.
     pub fn start_chain<T: Target>(&self, target: &T, starts: &Distribution1D, u: f32, rng: Pcg32) -> Chain<T::State> {
         let (index, _, _) = starts.sample_discrete(u);
-        Chain::start_clamped(target, sampler_for(self.seed, self.k, index, self.settings), rng, self.k, self.clamp)
+        let mut chain =
+            Chain::start_clamped(target, sampler_for(self.seed, self.k, index, self.settings), rng, self.k, self.clamp);
+        chain.set_mis_level(self.mis_level);
+        chain
     }
 }
 
@@ -262,7 +275,22 @@ impl ChainSettings {
             independent_below: 0,
             normaliser_share: super::normaliser::DEFAULT_SHARE,
             clamp: 0.0,
+            hybrid: 0.0,
+            chain_efficiency: super::hybrid::DEFAULT_EFFICIENCY,
         }
+    }
+
+    /// These settings with `ratio` samples of bidirectional path tracing per main-chain
+    /// mutation combined with the chains ([`super::hybrid`]; 0: none). Only for targets that
+    /// are MMLT's depths ([`Target::hybrid_depth`]).
+    pub fn with_hybrid(self, ratio: f64) -> Self {
+        Self { hybrid: ratio, ..self }
+    }
+
+    /// These settings with a main-chain mutation counting as `efficiency` independent samples
+    /// in the weights of [`Self::with_hybrid`].
+    pub fn with_chain_efficiency(self, efficiency: f64) -> Self {
+        Self { chain_efficiency: efficiency, ..self }
     }
 
     /// These settings with clampable targets clamped at `clamp` times the mean of their
@@ -407,6 +435,18 @@ impl ChainSettings {
         // Every independent walker's samples cover all the independently sampled depths.
         let independent_depths: Vec<usize> =
             (0..groups).filter(|&k| independent[k] && iplan.iter().any(|s| s.group == k)).collect();
+        // A time budget's rounds of about one mutation per pixel, shared as the fixed budget is.
+        let round_quota =
+            |slot: &Slot| ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1);
+        // One footprint of the film's filter for every splat buffer.
+        let footprint = Footprint::of(&scene.film);
+        let hybrid = self.hybrid_plan(&boots, &plan, &independent, budget.is_some(), &round_quota, &footprint);
+        if !hybrid.depths.is_empty() && (0..groups).any(|k| targets(k).hybrid_depth() != Some(k)) {
+            return Err("combining chains with bidirectional path tracing needs MMLT's per-depth targets".into());
+        }
+        let mut hybrids: Vec<Hybrid> =
+            hybrid.plan.iter().map(|slot| Hybrid::new(seed, slot.index, hybrid.plan.len())).collect();
+        let levels = hybrid.levels(groups);
         // Walkers start from bootstrap states drawn in proportion to their value.
         let starts: Vec<Distribution1D> = boots.iter().map(Bootstrap::starts).collect();
         let mut walkers: Vec<W> = plan
@@ -415,15 +455,20 @@ impl ChainSettings {
                 let (k, c) = (slot.group, slot.index);
                 let rng = Pcg32::new(hash(&[seed, 0xc4a1, k as u64, c as u64]), 7);
                 let bootstrap = &boots[k].values;
-                let group = GroupContext { k, seed, settings: self, budget: slot.budget, clamp: boots[k].clamp };
+                let group = GroupContext {
+                    k,
+                    seed,
+                    settings: self,
+                    budget: slot.budget,
+                    clamp: boots[k].clamp,
+                    mis_level: levels[k],
+                };
                 start_walker(StartContext { group, c, rng, starts: &starts[k], bootstrap })
             })
             .collect();
         let stop = || render.should_stop();
-        // One footprint of the film's filter for every splat buffer.
-        let footprint = Footprint::of(&scene.film);
         let clamps: Vec<f32> = boots.iter().map(|b| b.clamp).collect();
-        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, &clamps, &footprint, &stop);
+        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, (&clamps, &levels), &footprint, &stop);
         total_rays += rays;
         for slot in &iplan {
             prepared[slot.group].get_or_insert_with(|| Group {
@@ -435,12 +480,16 @@ impl ChainSettings {
         // Every rank prepares every group alike; each runs the walkers dealt to it (the
         // independent ones numbered after the others).
         let cluster = render.control.cluster;
-        let slots: Vec<Slot> = plan.iter().chain(&iplan).copied().collect();
+        let slots: Vec<Slot> = plan.iter().chain(&iplan).chain(&hybrid.plan).copied().collect();
         let independent_splats: Vec<&SharedSplats> = independent_depths
             .iter()
             .map(|&k| &prepared[k].as_ref().expect("every planned group is prepared").splats[0])
             .collect();
-        let run_round = |walkers: &mut [W], independents: &mut [Independent], quota: &(dyn Fn(&Slot) -> u64 + Sync)| {
+        let hybrid_ks: Vec<usize> = hybrid.depths.iter().map(|d| d.k).collect();
+        let run_round = |walkers: &mut [W],
+                         independents: &mut [Independent],
+                         hybrids: &mut [Hybrid],
+                         quota: &(dyn Fn(&Slot) -> u64 + Sync)| {
             // One walker per job: walkers differ in cost by orders of magnitude (the plan is
             // ordered by group, and the shallow depths hold most of the mutations), and rayon's
             // adaptive splitting would otherwise leave one thread a quarter of the plan to run
@@ -463,14 +512,41 @@ impl ChainSettings {
                     let done = walker.run(scene, &independent_depths, quota(slot), &independent_splats, &stop);
                     render.progress(done);
                 });
+            // The independent samples combined with the chains: the same share of every round
+            // (the weights assume it), or of the fixed budget.
+            let first = plan.len() + iplan.len();
+            hybrids.par_iter_mut().with_max_len(1).zip(&hybrid.plan).enumerate().filter(|(i, _)| cluster.owns(first + *i)).for_each(
+                |(_, (walker, slot))| {
+                    walker.run(scene, &hybrid.depths, &hybrid_ks, &hybrid.film, slot.quota(), &stop);
+                },
+            );
         };
         // The image so far (at rank 0, from every rank's walkers), its statistics taken
         // `seconds` after the start.
         // `extra` counts the normalisers' rays since the bootstrap.
-        let developed = |boots: &[Bootstrap], extra: u64, walkers: &[W], independents: &[Independent], seconds: f64| {
-            let reports = gather_reports(cluster, local_reports(cluster, walkers, independents, &plan, &prepared));
+        let developed = |boots: &[Bootstrap],
+                         extra: u64,
+                         walkers: &[W],
+                         independents: &[Independent],
+                         hybrids: &[Hybrid],
+                         seconds: f64| {
+            let local = local_reports(cluster, (walkers, independents, hybrids), &plan, &prepared);
+            let reports = gather_reports(cluster, local);
             let summed = cluster.is_distributed().then(|| sum_splats(cluster, &prepared));
-            let out = develop(boots, &reports, &slots, &prepared, summed.as_deref(), (w, h), self.group_images);
+            let hybrid_summed = cluster
+                .is_distributed()
+                .then(|| hybrid.film.with_buffers(sum_buffers(cluster, &hybrid.film.buffers)));
+            let independent_image = (!hybrid.depths.is_empty())
+                .then(|| (hybrid.depths.as_slice(), hybrid_summed.as_ref().unwrap_or(&hybrid.film)));
+            let out = develop(
+                boots,
+                &reports,
+                &slots,
+                &prepared,
+                (summed.as_deref(), independent_image),
+                (w, h),
+                self.group_images,
+            );
             RenderOutput {
                 stats: RenderStats { rays: out.stats.rays + total_rays + extra, seconds, ..out.stats },
                 ..out
@@ -479,7 +555,7 @@ impl ChainSettings {
         match budget {
             // A fixed budget: one round, each walker its share of its group's mutations.
             Some(m) => {
-                run_round(&mut walkers, &mut independents, &Slot::quota);
+                run_round(&mut walkers, &mut independents, &mut hybrids, &Slot::quota);
                 topup.run(&mut boots, targets, seed, m, &stop);
             }
             // A time budget: rounds of about one mutation per pixel, shared in proportion to
@@ -487,20 +563,18 @@ impl ChainSettings {
             // between rounds.
             None => {
                 let mut snapshots = render.snapshots(settings.budget);
-                let round_quota =
-                    |slot: &Slot| ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1);
                 // The main-chain mutations a whole round makes, on every rank together.
                 let per_round: u64 = plan.iter().map(round_quota).sum();
                 let mut rounds = 0u64;
                 while !cluster.broadcast(stop()) {
-                    run_round(&mut walkers, &mut independents, &round_quota);
+                    run_round(&mut walkers, &mut independents, &mut hybrids, &round_quota);
                     // The normalisers keep pace with the rounds finished on every rank.
                     if !cluster.broadcast(stop()) {
                         rounds += 1;
                         topup.run(&mut boots, targets, seed, rounds * per_round, &|| false);
                     }
                     if cluster.broadcast(snapshots.is_due(render)) {
-                        let out = developed(&boots, topup.rays, &walkers, &independents, 0.0);
+                        let out = developed(&boots, topup.rays, &walkers, &independents, &hybrids, 0.0);
                         snapshots.take(render, |seconds| RenderOutput {
                             stats: RenderStats { seconds, ..out.stats.clone() },
                             ..out
@@ -509,7 +583,7 @@ impl ChainSettings {
                 }
             }
         }
-        let mut out = developed(&boots, topup.rays, &walkers, &independents, 0.0);
+        let mut out = developed(&boots, topup.rays, &walkers, &independents, &hybrids, 0.0);
         render.finish(&mut out.stats);
         Ok(out)
     }
@@ -523,7 +597,7 @@ impl ChainSettings {
         plan: &[Slot],
         walkers: &mut [W],
         seed: u64,
-        clamps: &[f32],
+        (clamps, levels): (&[f32], &[f32]),
         footprint: &std::sync::Arc<Footprint>,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> (Prepared<W>, u64) {
@@ -541,7 +615,7 @@ impl ChainSettings {
             .with_max_len(1)
             .map(|(k, budget, group)| {
                 let start = std::time::Instant::now();
-                let cx = GroupContext { k, seed, settings: self, budget, clamp: clamps[k] };
+                let cx = GroupContext { k, seed, settings: self, budget, clamp: clamps[k], mis_level: levels[k] };
                 let (shared, rays) = W::prepare_group(group, &cx, stop);
                 (k, shared, rays, start.elapsed().as_secs_f64())
             })
@@ -554,5 +628,69 @@ impl ChainSettings {
             prepared[k] = Some(Group { shared: Some(shared), splats, seconds });
         }
         (prepared, rays)
+    }
+
+    /// The independent samples combined with the chains ([`super::hybrid`]), none without
+    /// [`Self::hybrid`]: `ratio` of the main-chain mutations (a fixed budget's, or a round's),
+    /// dealt to as many walkers as a group has chains, covering every depth not sampled
+    /// independently instead of by chains.
+    #[allow(clippy::too_many_arguments)]
+    fn hybrid_plan(
+        &self,
+        boots: &[Bootstrap],
+        plan: &[Slot],
+        independent: &[bool],
+        fixed: bool,
+        round_quota: &dyn Fn(&Slot) -> u64,
+        footprint: &std::sync::Arc<Footprint>,
+    ) -> HybridPlan {
+        let mut mutations = vec![0u64; boots.len()];
+        for slot in plan {
+            mutations[slot.group] += if fixed { slot.quota() } else { round_quota(slot) };
+        }
+        let total: u64 = mutations.iter().sum();
+        if self.hybrid <= 0.0 || total == 0 {
+            return HybridPlan::default();
+        }
+        let samples = ((self.hybrid * total as f64).round() as u64).max(1);
+        let depths: Vec<HybridDepth> = (0..boots.len())
+            .filter(|&k| !independent[k])
+            .map(|k| HybridDepth::new(k, boots[k].b(), (mutations[k], self.chain_efficiency), samples, boots[k].clamp))
+            .collect();
+        let walkers = (self.chains as u64).min(samples).max(1);
+        let plan = (0..walkers)
+            .map(|index| Slot { group: 0, index: index as usize, walkers, budget: Some(samples) })
+            .collect();
+        let layers = if self.group_images { depths.len() } else { 1 };
+        let mean: f64 = boots.iter().map(Bootstrap::b).sum();
+        let film = HybridFilm::new(layers, footprint, mean);
+        HybridPlan { depths, plan, film }
+    }
+}
+
+/// The independent samples a render combines with its chains ([`super::hybrid`]).
+struct HybridPlan {
+    /// The depths they cover, with their weights.
+    depths: Vec<HybridDepth>,
+    /// Their walkers, each with its share of the samples (of a round, under a time budget).
+    plan: Vec<Slot>,
+    /// Where they splat.
+    film: HybridFilm,
+}
+
+impl Default for HybridPlan {
+    fn default() -> Self {
+        Self { depths: Vec::new(), plan: Vec::new(), film: HybridFilm { buffers: Vec::new(), scale: 1.0 } }
+    }
+}
+
+impl HybridPlan {
+    /// Each group's chains' level ([`GroupContext::mis_level`]).
+    fn levels(&self, groups: usize) -> Vec<f32> {
+        let mut levels = vec![0.0; groups];
+        for d in self.depths.iter().filter(|d| d.level.is_finite()) {
+            levels[d.k] = d.level;
+        }
+        levels
     }
 }

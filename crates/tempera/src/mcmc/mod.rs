@@ -11,6 +11,7 @@ mod develop;
 pub mod direct;
 pub mod driver;
 pub mod full;
+pub mod hybrid;
 pub mod independent;
 pub mod normaliser;
 pub mod stats;

@@ -49,6 +49,9 @@ pub struct DepthStats {
     /// the samples drawn in its share of the budget, each of which covers every strategy of
     /// every independently sampled depth.
     pub independent: bool,
+    /// Samples of bidirectional path tracing combined with the chains ([`super::hybrid`]);
+    /// each covers every depth, and all are counted in depth 0's row.
+    pub hybrid_samples: u64,
 }
 
 impl DepthStats {
@@ -85,6 +88,7 @@ impl DepthStats {
             w.f64(b);
         }
         w.u64(self.bootstrap_nonzero).u64(u64::from(self.independent)).f64(self.large_step_estimate);
+        w.u64(self.hybrid_samples);
     }
 
     /// Statistics [`Self::encode`] wrote.
@@ -133,6 +137,7 @@ impl DepthStats {
         d.bootstrap_nonzero = r.u64();
         d.independent = r.u64() != 0;
         d.large_step_estimate = r.f64();
+        d.hybrid_samples = r.u64();
         d
     }
 
@@ -146,6 +151,7 @@ impl DepthStats {
         self.invalid += o.invalid;
         self.seconds += o.seconds;
         self.independent |= o.independent;
+        self.hybrid_samples += o.hybrid_samples;
         if let Some(o) = &o.swaps {
             self.swaps.get_or_insert_with(|| SwapStats::new(o.replicas)).merge(o);
         }

@@ -169,6 +169,11 @@ impl Target for TemperedTarget<'_> {
         (self.depth >= 1 && self.tau == 0.0).then_some(self.depth)
     }
 
+    /// The main target is MMLT's.
+    fn hybrid_depth(&self) -> Option<usize> {
+        (self.tau == 0.0).then_some(self.depth)
+    }
+
     /// The main target values a state as MMLT does at every depth, so its bootstraps are
     /// MMLT's, valued at all depths together.
     fn values_groups_together(&self) -> bool {

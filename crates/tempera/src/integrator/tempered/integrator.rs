@@ -70,6 +70,12 @@ pub struct TemperedIntegrator {
     /// With [`Swap::Mixture`], the weight `w` of the hotter targets in the mixture
     /// `f_0 + w Σ_{l ≥ 1} f_l/ρ_l` (1: every target's share equal).
     pub hot_weight: f64,
+    /// Samples of bidirectional path tracing per main-chain mutation, combined with replica 0's
+    /// splats by multiple importance sampling ([`crate::mcmc::hybrid`]; 0: none). Needs replica
+    /// 0 alone writing the image.
+    pub hybrid: f64,
+    /// What a main-chain mutation counts as in [`Self::hybrid`]'s weights.
+    pub chain_efficiency: f64,
     /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
     /// image.
     pub depth_images: bool,
@@ -112,6 +118,8 @@ impl TemperedIntegrator {
             hot_every: 1,
             hot_large_step: None,
             hot_weight: 1.0,
+            hybrid: 0.0,
+            chain_efficiency: crate::mcmc::hybrid::DEFAULT_EFFICIENCY,
             depth_images: false,
             independent_below: 0,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
@@ -136,6 +144,7 @@ impl TemperedIntegrator {
             reuse_replicas: false,
             independent_below: 0,
             normaliser_share: 0.0,
+            hybrid: 0.0,
             ..Self::new(max_depth)
         }
     }
@@ -228,13 +237,20 @@ impl Integrator for TemperedIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        if self.hybrid > 0.0 && (self.reuse_replicas || self.swap == Swap::Mixture) {
+            return Err("combining the chains with bidirectional path tracing (hybrid) needs replica 0 \
+                        alone writing the image: no replica reuse, no mixture chains"
+                .into());
+        }
         let bytes = self.memory_estimate(scene, settings.threads);
         control.check_memory(bytes, "a splat buffer per path depth and contributing replica")?;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_spread_allocation(self.spread_allocation)
             .with_group_images(self.depth_images)
             .with_independent_below(self.independent_below)
-            .with_normaliser_share(self.normaliser_share);
+            .with_normaliser_share(self.normaliser_share)
+            .with_hybrid(self.hybrid)
+            .with_chain_efficiency(self.chain_efficiency);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
@@ -246,8 +262,9 @@ impl Integrator for TemperedIntegrator {
         let layers = if self.reuse_replicas && self.swap != Swap::Mixture { self.replicas.max(1) } else { 1 } as u64;
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
         let depths = u64::from(self.max_depth) + 1;
+        let hybrid = crate::mcmc::hybrid::film_buffers(self.hybrid, self.depth_images, depths);
         pixels(scene)
-            .saturating_mul(12 + images + depths * layers * SHARED_SPLAT_BYTES)
+            .saturating_mul(12 + images + (depths * layers + hybrid) * SHARED_SPLAT_BYTES)
             .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
     }
 }
