@@ -49,10 +49,11 @@ fn ranks_render_the_single_process_image_byte_for_byte() {
     let Some(_alone) = mpirun_alone() else { return };
     let dir = scratch("identical");
     let common = ["--resolution", "40x30", "--seed", "5", "--threads", "1", "--quiet"];
-    let runs: [(&str, &[&str]); 6] = [
+    let runs: [(&str, &[&str]); 7] = [
         ("path", &["--spp", "6"]),
         ("bdpt", &["--spp", "3"]),
         ("mmlt", &["--mpp", "4", "--bootstrap", "4000"]),
+        ("mmlt", &["--mpp", "4", "--bootstrap", "4000", "--hybrid", "0.5"]),
         ("pssmlt", &["--mpp", "4", "--bootstrap", "4000"]),
         ("tempered", &["--mpp", "3", "--bootstrap", "4000"]),
         ("sppm", &["--spp", "3", "--photons", "3000", "--radius", "0.1"]),

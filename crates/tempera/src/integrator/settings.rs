@@ -564,6 +564,18 @@ mod tests {
                 "collapse_above must be a probability",
             ),
             (IntegratorKind::Mmlt, IntegratorSettings { photons: Some(10), ..Default::default() }, "photons is not"),
+            (IntegratorKind::Mmlt, IntegratorSettings { hybrid: Some(-0.1), ..Default::default() }, "hybrid must be"),
+            (
+                IntegratorKind::Mmlt,
+                IntegratorSettings { hybrid: Some(f64::NAN), ..Default::default() },
+                "hybrid must be",
+            ),
+            (
+                IntegratorKind::Tempered,
+                IntegratorSettings { chain_efficiency: Some(0.0), ..Default::default() },
+                "chain_efficiency must be",
+            ),
+            (IntegratorKind::Pssmlt, IntegratorSettings { hybrid: Some(0.1), ..Default::default() }, "hybrid is not"),
             (IntegratorKind::Sppm, IntegratorSettings { radius: Some(-1.0), ..Default::default() }, "radius must be"),
             (IntegratorKind::Sppm, IntegratorSettings { photons: Some(0), ..Default::default() }, "photons must lie"),
             (

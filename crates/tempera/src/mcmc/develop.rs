@@ -46,7 +46,12 @@ pub(super) fn local_reports<W: Walker>(
         large: vec![Moments::default()],
         rays: walker.rays(),
     });
-    chains.chain(others).chain(hybrid).enumerate().map(|(i, r)| if cluster.owns(i) { r } else { Report::default() }).collect()
+    chains
+        .chain(others)
+        .chain(hybrid)
+        .enumerate()
+        .map(|(i, r)| if cluster.owns(i) { r } else { Report::default() })
+        .collect()
 }
 
 /// Every walker's report, at rank 0 (each from the rank that runs it); the other ranks get
@@ -86,6 +91,9 @@ pub(super) fn sum_buffers(cluster: &dyn Cluster, buffers: &[SharedSplats]) -> Ve
         .collect()
 }
 
+/// The independent samples combined with the chains: the depths they cover and their film.
+pub(super) type IndependentImage<'a> = (&'a [HybridDepth], &'a HybridFilm);
+
 /// Every prepared group's splat buffers summed over the ranks (integer sums, exact).
 pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) -> Vec<Vec<SharedSplats>> {
     groups
@@ -110,7 +118,7 @@ pub(super) fn develop<L: Layers>(
     reports: &[Report],
     plan: &[Slot],
     groups: &[Option<Group<L>>],
-    (summed, hybrid): (Option<&[Vec<SharedSplats>]>, Option<(&[HybridDepth], &HybridFilm)>),
+    (summed, hybrid): (Option<&[Vec<SharedSplats>]>, Option<IndependentImage>),
     (w, h): (u32, u32),
     group_images: bool,
 ) -> RenderOutput {

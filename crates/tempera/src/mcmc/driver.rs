@@ -515,11 +515,15 @@ impl ChainSettings {
             // The independent samples combined with the chains: the same share of every round
             // (the weights assume it), or of the fixed budget.
             let first = plan.len() + iplan.len();
-            hybrids.par_iter_mut().with_max_len(1).zip(&hybrid.plan).enumerate().filter(|(i, _)| cluster.owns(first + *i)).for_each(
-                |(_, (walker, slot))| {
+            hybrids
+                .par_iter_mut()
+                .with_max_len(1)
+                .zip(&hybrid.plan)
+                .enumerate()
+                .filter(|(i, _)| cluster.owns(first + *i))
+                .for_each(|(_, (walker, slot))| {
                     walker.run(scene, &hybrid.depths, &hybrid_ks, &hybrid.film, slot.quota(), &stop);
-                },
-            );
+                });
         };
         // The image so far (at rank 0, from every rank's walkers), its statistics taken
         // `seconds` after the start.
@@ -533,9 +537,8 @@ impl ChainSettings {
             let local = local_reports(cluster, (walkers, independents, hybrids), &plan, &prepared);
             let reports = gather_reports(cluster, local);
             let summed = cluster.is_distributed().then(|| sum_splats(cluster, &prepared));
-            let hybrid_summed = cluster
-                .is_distributed()
-                .then(|| hybrid.film.with_buffers(sum_buffers(cluster, &hybrid.film.buffers)));
+            let hybrid_summed =
+                cluster.is_distributed().then(|| hybrid.film.with_buffers(sum_buffers(cluster, &hybrid.film.buffers)));
             let independent_image = (!hybrid.depths.is_empty())
                 .then(|| (hybrid.depths.as_slice(), hybrid_summed.as_ref().unwrap_or(&hybrid.film)));
             let out = develop(

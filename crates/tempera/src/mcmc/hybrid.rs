@@ -133,8 +133,7 @@ impl HybridFilm {
         let weights = self.weights().image(1.0);
         let (w, h) = (self.weights().width as usize, self.weights().height as usize);
         let camera = self.camera(layer).image(1.0 / f64::from(self.scale));
-        let light =
-            self.light(layer).image((w * h) as f64 / (samples.max(1) as f64 * f64::from(self.scale)));
+        let light = self.light(layer).image((w * h) as f64 / (samples.max(1) as f64 * f64::from(self.scale)));
         let pixels = camera
             .pixels
             .iter()
