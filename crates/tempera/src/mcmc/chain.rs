@@ -164,8 +164,8 @@ impl<S: State> Chain<S> {
         self.cx.rays += rays;
     }
 
-    /// Replaces this chain by `fresh`, keeping the count of rays traced by both (and `fresh`'s
-    /// clamp).
+    /// Replaces this chain by `fresh`, keeping the count of rays traced by both, this chain's
+    /// large-step probability and level of independent samples (and `fresh`'s clamp).
     pub fn restart(&mut self, fresh: Chain<S>) {
         let (rays, p, h) = (self.cx.rays, self.large_step_probability(), self.mis_level);
         *self = fresh;

@@ -14,7 +14,9 @@
 //! refined `b` does not hinge on the bootstrap. A target with a lower-variance estimator of its
 //! own `b` (MMLT's depths: [`super::all_strategies`]) has it combined with those samples. Each
 //! group's image is scaled by
-//! `N_pixels · b_l/ρ_l / M` (`M` the group's mutations).
+//! `N_pixels · b_l/ρ_l / M` (`M` the group's mutations). With [`ChainSettings::hybrid`], BDPT
+//! samples drawn beside the chains in a fixed ratio are combined with them by multiple
+//! importance sampling ([`super::hybrid`]).
 
 use super::bootstrap::{Bootstrap, sampler_for};
 use super::develop::{develop, gather_reports, local_reports, sum_buffers, sum_splats};
@@ -478,7 +480,7 @@ impl ChainSettings {
             });
         }
         // Every rank prepares every group alike; each runs the walkers dealt to it (the
-        // independent ones numbered after the others).
+        // independent ones numbered after the chains, the hybrid samples' after those).
         let cluster = render.control.cluster;
         let slots: Vec<Slot> = plan.iter().chain(&iplan).chain(&hybrid.plan).copied().collect();
         let independent_splats: Vec<&SharedSplats> = independent_depths

@@ -10,21 +10,23 @@
 //! heuristic (Veach 1997 §9.2) weighs a point by
 //!
 //! ```text
-//! w_m(x) = N_m p_m(x) / (N_m p_m(x) + n N_b) = f/(f + h),   w_b(x) = h/(f + h),
-//! h = n · b_k · N_b / N_m,
+//! w_m(x) = e N_m p_m(x) / (e N_m p_m(x) + n N_b) = f/(f + h),   w_b(x) = h/(f + h),
+//! h = n · b_k · N_b / (e N_m),
 //! ```
 //!
-//! the level of the independent samples' density in the chain's target units. A chain state
+//! the level of the independent samples' density in the chain's target units, where a mutation
+//! counts as `e` independent samples at the same density (`chain_efficiency`; small steps keep
+//! a chain's successive states close, so `e` is well below 1). A chain state
 //! then splats `C/(f + h)` instead of MMLT's `C/f` (developed with `b_k/N_m` as before), and
 //! an independent sample's strategy `w_s·C_s·h/(f + h)` (developed as BDPT's samples are: the
 //! pixels take their samples in turn, each pixel's camera-ray contributions are averaged over
-//! its own samples and light tracing's are scaled by the pixels over the samples drawn). The weights
-//! sum to one at every point for any `h`, so the combination is unbiased whatever the counts
+//! its own samples and light tracing's are scaled by the pixels over the samples drawn). The
+//! weights sum to one at every point for any `h`, so the combination is unbiased whatever the counts
 //! the weights assume; the render fixes them before its first mutation (the rounds' shares, or
 //! the fixed budget's), with `b_k` from the bootstrap, and develops with the counts made.
 //!
-//! This is what Kelemen et al. 2002 (§5) do with a chain's own large steps, done with whole
-//! BDPT samples, which serve every depth at once: where the chains' density is low (dim parts
+//! Kelemen et al. 2002 weigh a chain's own large steps against its states so; here the
+//! independent samples are whole BDPT samples, which serve every depth at once: where the chains' density is low (dim parts
 //! of the image, which MMLT, allotting mutations by brightness, visits rarely) the independent
 //! samples carry the estimate as BDPT does; where a bright, hard-to-find path family holds the
 //! chains, they carry it. In parallel tempering's terms the independent samples are a replica
