@@ -25,6 +25,8 @@ mod markov_chain_tests;
 #[cfg(test)]
 mod media_tests;
 #[cfg(test)]
+mod settings_tests;
+#[cfg(test)]
 mod tests;
 
 pub use bdpt::{BdptIntegrator, Strategies};

@@ -2,9 +2,10 @@
 //! from every rank, each group's normalisation refined with its large steps, and each layer's
 //! splats scaled to its share of the image.
 
-use super::driver::{Group, Layers, Slot, Walker};
+use super::driver::{Group, Slot};
 use super::hybrid::{Hybrid, HybridDepth, HybridFilm};
 use super::independent::Independent;
+use super::walker::{Layers, Walker};
 use super::{Bootstrap, DepthStats, Moments};
 use crate::cluster::{Cluster, Reader, Wire};
 use crate::film::SharedSplats;

@@ -17,11 +17,13 @@ pub mod normaliser;
 pub mod stats;
 pub mod strategy;
 pub mod tempered;
+pub mod walker;
 
 pub use bootstrap::{Bootstrap, sampler_for, shared_bootstrap_bytes};
 pub use chain::{Chain, EvalContext, GroupValue, State, Target, target_value};
-pub use driver::{ChainSettings, GroupContext, Layers, OneLayer, Single, StartContext, Walker};
+pub use driver::ChainSettings;
 pub use full::{FullContribution, evaluate_full};
 pub use stats::{DepthStats, Moments, NormaliserMoments, SwapStats};
 pub use strategy::{Contribution, Evaluated, evaluate, evaluate_connection, evaluate_depths, valid_radiance};
 pub use tempered::{Flattening, TemperedState, TemperedTarget};
+pub use walker::{GroupContext, Layers, OneLayer, Single, StartContext, Walker};

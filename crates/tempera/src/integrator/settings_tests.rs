@@ -1,0 +1,88 @@
+//! The integrator settings: what is serialised, how they are checked against the integrator
+//! and each other, and the names of the integrators.
+
+use super::settings::*;
+use crate::bidir::Heuristic;
+use crate::scene::RenderDefaults;
+
+/// Only the settings given are serialised, so records of them (cache keys) do not change
+/// when a setting is added; they read back as they were.
+#[test]
+fn absent_settings_are_left_out_when_serialised() {
+    let given = IntegratorSettings {
+        replicas: Some(2),
+        tuning: Some(LadderTuning::BurnIn),
+        burn_in: Some(40),
+        ..Default::default()
+    };
+    let json = serde_json::to_string(&given).unwrap();
+    assert_eq!(json, r#"{"replicas":2,"tuning":"burn-in","burn_in":40}"#);
+    assert_eq!(serde_json::from_str::<IntegratorSettings>(&json).unwrap(), given);
+    assert_eq!(serde_json::to_string(&IntegratorSettings::default()).unwrap(), "{}");
+}
+
+#[test]
+fn settings_are_checked_against_the_integrator_and_each_other() {
+    let ok = IntegratorSettings { replicas: Some(3), ladder: Some(vec![0.1, 0.3]), ..Default::default() };
+    assert!(create(IntegratorKind::Tempered, &ok, &RenderDefaults::default()).is_ok());
+    // Cold replicas: only zeros may repeat.
+    let cold = IntegratorSettings { replicas: Some(4), ladder: Some(vec![0.0, 0.0, 0.3]), ..Default::default() };
+    assert!(create(IntegratorKind::Tempered, &cold, &RenderDefaults::default()).is_ok());
+    let cases = [
+        (IntegratorKind::Mmlt, IntegratorSettings { replicas: Some(3), ..Default::default() }, "replicas is not"),
+        (IntegratorKind::Path, IntegratorSettings { mis: Some(Heuristic::Balance), ..Default::default() }, "mis"),
+        (IntegratorKind::Tempered, IntegratorSettings { replicas: Some(4), ..ok.clone() }, "must be 3"),
+        (IntegratorKind::Tempered, IntegratorSettings { ladder: Some(vec![0.3, 0.1]), ..ok.clone() }, "increase"),
+        (IntegratorKind::Tempered, IntegratorSettings { ladder: Some(vec![0.3, 0.3]), ..ok.clone() }, "increase"),
+        (IntegratorKind::Tempered, IntegratorSettings { ladder: Some(vec![-0.1, 0.3]), ..ok.clone() }, "[0, 1000]"),
+        (IntegratorKind::Mmlt, IntegratorSettings { large_step: Some(0.0), ..Default::default() }, "probability"),
+        (IntegratorKind::Mmlt, IntegratorSettings { chains: Some(0), ..Default::default() }, "chains must lie"),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { max_temperature: Some(0.5), ..Default::default() },
+            "max_temperature must lie",
+        ),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { collapse_above: Some(0.0), ..Default::default() },
+            "collapse_above must be a probability",
+        ),
+        (IntegratorKind::Mmlt, IntegratorSettings { photons: Some(10), ..Default::default() }, "photons is not"),
+        (IntegratorKind::Mmlt, IntegratorSettings { hybrid: Some(-0.1), ..Default::default() }, "hybrid must be"),
+        (IntegratorKind::Mmlt, IntegratorSettings { hybrid: Some(f64::NAN), ..Default::default() }, "hybrid must be"),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { chain_efficiency: Some(0.0), ..Default::default() },
+            "chain_efficiency must be",
+        ),
+        (IntegratorKind::Pssmlt, IntegratorSettings { hybrid: Some(0.1), ..Default::default() }, "hybrid is not"),
+        (IntegratorKind::Sppm, IntegratorSettings { radius: Some(-1.0), ..Default::default() }, "radius must be"),
+        (IntegratorKind::Sppm, IntegratorSettings { photons: Some(0), ..Default::default() }, "photons must lie"),
+        (IntegratorKind::Mmlt, IntegratorSettings { collapse_above: Some(0.5), ..Default::default() }, "not a setting"),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { tuning: Some(LadderTuning::Bootstrap), burn_in: Some(100), ..Default::default() },
+            "needs tuning = burn-in",
+        ),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { swap: Some(Swap::Permutation), replicas: Some(9), ..Default::default() },
+            "at most 8",
+        ),
+    ];
+    for (kind, settings, needle) in cases {
+        let err = create(kind, &settings, &RenderDefaults { max_depth: 5, ..RenderDefaults::default() })
+            .err()
+            .unwrap_or_default();
+        assert!(err.contains(needle), "{kind} {settings:?}: {err:?}");
+    }
+}
+
+#[test]
+fn names_round_trip() {
+    for kind in IntegratorKind::ALL {
+        assert_eq!(IntegratorKind::from_name(kind.name()), Some(kind));
+    }
+    assert_eq!(IntegratorKind::from_name("sppm"), Some(IntegratorKind::Sppm));
+    assert_eq!(IntegratorKind::from_name("vcm"), None);
+}
