@@ -16,6 +16,7 @@ render)
     "bdpt --spp 2 --mis balance"
     "pssmlt --mpp 4 --bootstrap 4000"
     "mmlt --mpp 4 --bootstrap 4000"
+    "mmlt --mpp 4 --bootstrap 4000 --hybrid 0.5"
     "tempered --mpp 4 --bootstrap 4000 --burn-in 40"
     "tempered --mpp 4 --bootstrap 4000 --burn-in 40 --no-reuse-replicas"
     "tempered --mpp 4 --bootstrap 4000 --burn-in 40 --swap equi-energy"

@@ -58,6 +58,11 @@ pub struct IntegratorFlags {
     /// a chain's successive states are correlated)
     #[arg(long, value_name = "E")]
     pub chain_efficiency: Option<f64>,
+    /// MMLT and tempered MMLT: measure what a mutation of each depth's chains is worth in
+    /// independent samples, from two halves of the chains (reported by --stats as
+    /// `measured_efficiency`; the depths' splat buffers take twice the memory)
+    #[arg(long)]
+    pub measure_efficiency: bool,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long)]
     pub replicas: Option<usize>,
@@ -169,6 +174,7 @@ impl IntegratorFlags {
             target_clamp: self.target_clamp,
             hybrid: self.hybrid,
             chain_efficiency: self.chain_efficiency,
+            measure_efficiency: self.measure_efficiency.then_some(true),
             replicas: self.replicas,
             swap: self.swap,
             ladder: self.ladder.clone(),

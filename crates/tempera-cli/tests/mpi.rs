@@ -53,13 +53,13 @@ fn ranks_render_the_single_process_image_byte_for_byte() {
         ("path", &["--spp", "6"]),
         ("bdpt", &["--spp", "3"]),
         ("mmlt", &["--mpp", "4", "--bootstrap", "4000"]),
-        ("mmlt", &["--mpp", "4", "--bootstrap", "4000", "--hybrid", "0.5"]),
+        ("mmlt", &["--mpp", "4", "--bootstrap", "4000", "--hybrid", "0.5", "--measure-efficiency"]),
         ("pssmlt", &["--mpp", "4", "--bootstrap", "4000"]),
         ("tempered", &["--mpp", "3", "--bootstrap", "4000"]),
         ("sppm", &["--spp", "3", "--photons", "3000", "--radius", "0.1"]),
     ];
     for (integrator, budget) in runs {
-        let mut images = Vec::new();
+        let (mut images, mut efficiencies) = (Vec::new(), Vec::new());
         for ranks in [None, Some(2), Some(3)] {
             let name = format!("{integrator}-{}.exr", ranks.unwrap_or(1));
             let mut args = vec!["render", "--integrator", integrator, "-o", &name, "--stats", "stats.json"];
@@ -71,6 +71,13 @@ fn ranks_render_the_single_process_image_byte_for_byte() {
             let stats: serde_json::Value =
                 serde_json::from_str(&std::fs::read_to_string(dir.join("stats.json")).unwrap()).unwrap();
             assert_eq!(stats["ranks"].as_u64().unwrap_or(1), ranks.unwrap_or(1) as u64, "{integrator}: {stats}");
+            let depths = stats["depths"].as_array().unwrap();
+            efficiencies.push(depths.iter().map(|d| d["measured_efficiency"].as_f64()).collect::<Vec<_>>());
+        }
+        // Measured from the halves summed over the ranks, the same everywhere.
+        assert!(efficiencies.iter().all(|e| *e == efficiencies[0]), "{integrator}: {efficiencies:?}");
+        if budget.contains(&"--measure-efficiency") {
+            assert!(efficiencies[0].iter().any(Option::is_some), "{integrator}: nothing measured");
         }
         assert!(images[0] == images[1], "{integrator}: 2 ranks differ from one process");
         assert!(images[0] == images[2], "{integrator}: 3 ranks differ from one process");

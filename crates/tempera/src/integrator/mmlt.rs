@@ -41,6 +41,9 @@ pub struct MmltIntegrator {
     pub hybrid: f64,
     /// What a main-chain mutation counts as in the weights of [`Self::hybrid`]'s combination.
     pub chain_efficiency: f64,
+    /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
+    /// ([`crate::mcmc::efficiency`]).
+    pub measure_efficiency: bool,
 }
 
 impl MmltIntegrator {
@@ -58,6 +61,7 @@ impl MmltIntegrator {
             target_clamp: 0.0,
             hybrid: 0.0,
             chain_efficiency: crate::mcmc::hybrid::DEFAULT_EFFICIENCY,
+            measure_efficiency: false,
         }
     }
 }
@@ -130,7 +134,8 @@ impl Integrator for MmltIntegrator {
             .with_normaliser_share(self.normaliser_share)
             .with_clamp(self.target_clamp)
             .with_hybrid(self.hybrid)
-            .with_chain_efficiency(self.chain_efficiency);
+            .with_chain_efficiency(self.chain_efficiency)
+            .with_measured_efficiency(self.measure_efficiency);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.group.k;
@@ -143,8 +148,10 @@ impl Integrator for MmltIntegrator {
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
         let depths = u64::from(self.max_depth) + 1;
         let hybrid = crate::mcmc::hybrid::film_buffers(self.hybrid, self.depth_images, depths);
+        // With the efficiency measured, the odd walkers' buffers of every depth.
+        let halves = if self.measure_efficiency { 2 } else { 1 };
         pixels(scene)
-            .saturating_mul(12 + images + (depths + hybrid) * SHARED_SPLAT_BYTES)
+            .saturating_mul(12 + images + (halves * depths + hybrid) * SHARED_SPLAT_BYTES)
             .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
     }
 }

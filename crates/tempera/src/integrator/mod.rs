@@ -17,6 +17,8 @@ pub mod tiles;
 #[cfg(test)]
 mod clamp_tests;
 #[cfg(test)]
+mod efficiency_tests;
+#[cfg(test)]
 mod hybrid_tests;
 #[cfg(test)]
 mod layer_tests;

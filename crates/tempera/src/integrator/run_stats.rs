@@ -112,6 +112,11 @@ pub struct DepthRecord {
     /// covering every depth; all are counted in depth 0's row.
     #[serde(default, skip_serializing_if = "is_zero_u64")]
     pub hybrid_samples: u64,
+    /// What one main-chain mutation of the depth was worth in independent samples of the
+    /// chains' own density, measured from two halves of its chains (`--measure-efficiency`;
+    /// absent without it, or where the halves could not tell).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub measured_efficiency: f64,
     /// How unevenly the depth's light is spread over its paths: `sqrt(E[f²]/E[f]²)` over the
     /// bootstrap's non-zero values, capped at 8 (mutations may be allotted by `b` times it).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -212,6 +217,7 @@ impl DepthRecord {
             large_step_estimate: d.large_step_estimate,
             independent: d.independent,
             hybrid_samples: d.hybrid_samples,
+            measured_efficiency: d.measured_efficiency,
             spread: d.spread,
             mutations: d.mutations,
             acceptance: Acceptance {

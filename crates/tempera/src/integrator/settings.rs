@@ -180,6 +180,10 @@ pub struct IntegratorSettings {
     /// independent samples at the same density, in the weights of the combination.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub chain_efficiency: Option<f64>,
+    /// MMLT and tempered MMLT: measure each depth's chain efficiency (what a mutation is worth
+    /// in independent samples) from two halves of its chains, for the statistics.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measure_efficiency: Option<bool>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
@@ -297,6 +301,7 @@ impl IntegratorSettings {
             ("target_clamp", self.target_clamp.is_some(), kind == Mmlt),
             ("hybrid", self.hybrid.is_some(), kind == Mmlt || tempered),
             ("chain_efficiency", self.chain_efficiency.is_some(), kind == Mmlt || tempered),
+            ("measure_efficiency", self.measure_efficiency.is_some(), kind == Mmlt || tempered),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
@@ -459,6 +464,7 @@ pub fn create(
                 target_clamp: s.target_clamp.unwrap_or(m.target_clamp),
                 hybrid: s.hybrid.unwrap_or(m.hybrid),
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
+                measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
                 depth_images: s.depth_images,
                 ..m
             })
@@ -501,6 +507,7 @@ pub fn create(
                 hot_weight: s.hot_weight.unwrap_or(m.hot_weight),
                 hybrid: s.hybrid.unwrap_or(m.hybrid),
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
+                measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
                 depth_images: s.depth_images,
                 ..m
             })

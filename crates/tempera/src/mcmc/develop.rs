@@ -3,6 +3,7 @@
 //! splats scaled to its share of the image.
 
 use super::driver::{Group, Slot};
+use super::efficiency::{Halves, second_moment};
 use super::hybrid::{Hybrid, HybridDepth, HybridFilm};
 use super::independent::Independent;
 use super::walker::{Layers, Walker};
@@ -81,9 +82,12 @@ pub(super) fn gather_reports(cluster: &dyn Cluster, mut reports: Vec<Report>) ->
 }
 
 /// Splat buffers summed over the ranks (integer sums, exact).
-pub(super) fn sum_buffers(cluster: &dyn Cluster, buffers: &[SharedSplats]) -> Vec<SharedSplats> {
+pub(super) fn sum_buffers<'a>(
+    cluster: &dyn Cluster,
+    buffers: impl IntoIterator<Item = &'a SharedSplats>,
+) -> Vec<SharedSplats> {
     buffers
-        .iter()
+        .into_iter()
         .map(|b| {
             let mut values = b.values();
             cluster.sum(&mut values);
@@ -101,7 +105,7 @@ pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) 
         .iter()
         .map(|g| {
             let Some(g) = g else { return Vec::new() };
-            sum_buffers(cluster, &g.splats)
+            sum_buffers(cluster, g.splats.iter().chain(&g.odd))
         })
         .collect()
 }
@@ -112,7 +116,9 @@ pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) 
 /// of the image per mutation. Rays count the walkers' rays only. With `group_images`, each
 /// group's share of the image (its layers summed) is also returned, in group order. The
 /// independent samples combined with the chains (`hybrid`: their depths and one buffer per
-/// depth, summed over the ranks) add their share ([`super::hybrid`]).
+/// depth, summed over the ranks) add their share ([`super::hybrid`]). Groups whose walkers
+/// splat in halves ([`Group::odd`]) get their chain efficiency measured, with the film's
+/// filter energy `kappa` ([`super::efficiency`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn develop<L: Layers>(
     boots: &[Bootstrap],
@@ -121,7 +127,7 @@ pub(super) fn develop<L: Layers>(
     groups: &[Option<Group<L>>],
     (summed, hybrid): (Option<&[Vec<SharedSplats>]>, Option<IndependentImage>),
     (w, h): (u32, u32),
-    group_images: bool,
+    (group_images, kappa): (bool, f64),
 ) -> RenderOutput {
     let pixels = u64::from(w) * u64::from(h);
     let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.shared.valued());
@@ -129,8 +135,12 @@ pub(super) fn develop<L: Layers>(
         (0..boots.len()).map(|k| DepthStats { depth: k, ..DepthStats::default() }).collect();
     let mut large: Vec<Vec<Moments>> = (0..boots.len()).map(|k| vec![Moments::default(); layers(k)]).collect();
     let mut rays = 0;
+    // Per group, the mutations of its walkers of even and of odd index ([`Group::odd`]).
+    let mut halves = vec![(0u64, 0u64); boots.len()];
     for (report, slot) in reports.iter().zip(plan) {
         let k = slot.group;
+        let half = if slot.index % 2 == 0 { &mut halves[k].0 } else { &mut halves[k].1 };
+        *half += report.stats.mutations;
         stats[k].merge(&report.stats);
         for (sums, m) in large[k].iter_mut().zip(&report.large) {
             sums.merge(m);
@@ -164,7 +174,12 @@ pub(super) fn develop<L: Layers>(
             continue;
         };
         let buffers = summed.map_or(group.splats.as_slice(), |s| s[k].as_slice());
-        invalid += d.invalid + buffers.iter().map(SharedSplats::invalid).sum::<u64>();
+        invalid += d.invalid
+            + buffers.iter().map(SharedSplats::invalid).sum::<u64>()
+            + if summed.is_some() { 0 } else { group.odd.iter().map(SharedSplats::invalid).sum::<u64>() };
+        // The odd walkers' splats where they went to buffers of their own ([`Group::odd`]).
+        let (buffers, odd) =
+            if summed.is_some() { buffers.split_at(group.splats.len()) } else { (buffers, group.odd.as_slice()) };
         d.replica_b_ratios = group.shared.ratios().iter().map(|&r| r as f32).collect();
         d.prepare_seconds = group.seconds;
         if d.mutations == 0 {
@@ -192,7 +207,12 @@ pub(super) fn develop<L: Layers>(
             } else {
                 b / ratio * pixels as f64 / d.mutations as f64
             };
-            let layer = buffer.image(scale);
+            let mut layer = buffer.image(scale);
+            if let Some(odd) = odd.get(l) {
+                for (p, q) in layer.pixels.iter_mut().zip(&odd.image(scale).pixels) {
+                    *p += *q;
+                }
+            }
             for (p, q) in image.pixels.iter_mut().zip(&layer.pixels) {
                 *p += *q;
             }
@@ -204,6 +224,18 @@ pub(super) fn develop<L: Layers>(
         }
         if layer_b.len() > 1 {
             d.replica_b = layer_b;
+        }
+        // A single layer splatted in halves: the chains' efficiency, their splats weighted as
+        // they were (MMLT's, or combined with independent samples at the depth's level).
+        if let ([even], [odd]) = (buffers, odd)
+            && !group.shared.mixture()
+        {
+            let level = hybrid
+                .and_then(|(depths, _)| depths.iter().find(|x| x.k == k))
+                .map_or(0.0, |x| if x.level.is_finite() { x.level } else { 0.0 });
+            let g2 = second_moment(&boot.values, boot.clamp, level);
+            let mutations = halves[k];
+            d.measured_efficiency = Halves { even, odd, mutations }.efficiency(d.b, g2, kappa).unwrap_or(0.0);
         }
     }
     // The independent samples' share: each depth's weighted splats over the samples drawn.

@@ -21,7 +21,8 @@
 use super::Target;
 use super::bootstrap::Bootstrap;
 use super::develop::{develop, gather_reports, local_reports, sum_buffers, sum_splats};
-use super::hybrid::{Hybrid, HybridDepth, HybridFilm};
+use super::hybrid::Hybrid;
+use super::hybrid_plan::HybridPlan;
 use super::independent::Independent;
 use super::normaliser::Topup;
 use super::walker::{GroupContext, Layers, StartContext, Walker};
@@ -65,6 +66,9 @@ pub struct ChainSettings {
     /// What a main-chain mutation counts as in those weights, in independent samples at the
     /// same density: a chain's successive states are correlated.
     pub chain_efficiency: f64,
+    /// Measure each group's chain efficiency: its walkers of odd index splat into buffers of
+    /// their own ([`Group::odd`]; [`super::efficiency`]), developed with the others.
+    pub measure_efficiency: bool,
 }
 
 /// One walker's place in the render.
@@ -75,14 +79,14 @@ pub(super) struct Slot {
     /// Its index in the group.
     pub index: usize,
     /// The group's walker count.
-    walkers: u64,
+    pub walkers: u64,
     /// The group's mutations under a fixed budget.
-    budget: Option<u64>,
+    pub budget: Option<u64>,
 }
 
 impl Slot {
     /// This walker's share of its group's fixed budget.
-    fn quota(&self) -> u64 {
+    pub fn quota(&self) -> u64 {
         let m = self.budget.unwrap_or(0);
         m / self.walkers + u64::from((self.index as u64) < m % self.walkers)
     }
@@ -93,6 +97,9 @@ impl Slot {
 pub(super) struct Group<L> {
     pub shared: L,
     pub splats: Vec<SharedSplats>,
+    /// Where the walkers of odd index splat instead, when the chain efficiency is measured
+    /// ([`ChainSettings::measure_efficiency`]); empty otherwise.
+    pub odd: Vec<SharedSplats>,
     pub seconds: f64,
 }
 
@@ -114,6 +121,7 @@ impl ChainSettings {
             clamp: 0.0,
             hybrid: 0.0,
             chain_efficiency: super::hybrid::DEFAULT_EFFICIENCY,
+            measure_efficiency: false,
         }
     }
 
@@ -128,6 +136,12 @@ impl ChainSettings {
     /// in the weights of [`Self::with_hybrid`].
     pub fn with_chain_efficiency(self, efficiency: f64) -> Self {
         Self { chain_efficiency: efficiency, ..self }
+    }
+
+    /// These settings with each group's chain efficiency measured when `on` is set
+    /// ([`Self::measure_efficiency`]).
+    pub fn with_measured_efficiency(self, on: bool) -> Self {
+        Self { measure_efficiency: on, ..self }
     }
 
     /// These settings with clampable targets clamped at `clamp` times the mean of their
@@ -277,7 +291,8 @@ impl ChainSettings {
             |slot: &Slot| ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1);
         // One footprint of the film's filter for every splat buffer.
         let footprint = Footprint::of(&scene.film);
-        let hybrid = self.hybrid_plan(&boots, &plan, &independent, budget.is_some(), &round_quota, &footprint);
+        let kappa = super::efficiency::filter_energy(&footprint);
+        let hybrid = HybridPlan::new(self, &boots, (&plan, &independent), budget.is_some(), &round_quota, &footprint);
         if !hybrid.depths.is_empty() && (0..groups).any(|k| targets(k).hybrid_depth() != Some(k)) {
             return Err("combining chains with bidirectional path tracing needs MMLT's per-depth targets".into());
         }
@@ -305,12 +320,14 @@ impl ChainSettings {
             .collect();
         let stop = || render.should_stop();
         let clamps: Vec<f32> = boots.iter().map(|b| b.clamp).collect();
-        let (mut prepared, rays) = self.prepare(&plan, &mut walkers, seed, (&clamps, &levels), &footprint, &stop);
+        let (mut prepared, rays) =
+            self.prepare(&plan, &mut walkers, seed, (&clamps, &levels, self.measure_efficiency), &footprint, &stop);
         total_rays += rays;
         for slot in &iplan {
             prepared[slot.group].get_or_insert_with(|| Group {
                 shared: None,
                 splats: vec![SharedSplats::filtered(&footprint)],
+                odd: Vec::new(),
                 seconds: 0.0,
             });
         }
@@ -335,7 +352,8 @@ impl ChainSettings {
                 |(_, (walker, slot))| {
                     let group = prepared[slot.group].as_ref().expect("every planned group is prepared");
                     let shared = group.shared.as_ref().expect("a group of walkers has their shared state");
-                    let done = walker.run(shared, quota(slot), &group.splats, &stop);
+                    let splats = if slot.index % 2 == 1 && !group.odd.is_empty() { &group.odd } else { &group.splats };
+                    let done = walker.run(shared, quota(slot), splats, &stop);
                     render.progress(done);
                 },
             );
@@ -385,7 +403,7 @@ impl ChainSettings {
                 &prepared,
                 (summed.as_deref(), independent_image),
                 (w, h),
-                self.group_images,
+                (self.group_images, kappa),
             );
             RenderOutput {
                 stats: RenderStats { rays: out.stats.rays + total_rays + extra, seconds, ..out.stats },
@@ -437,7 +455,7 @@ impl ChainSettings {
         plan: &[Slot],
         walkers: &mut [W],
         seed: u64,
-        (clamps, levels): (&[f32], &[f32]),
+        (clamps, levels, halves): (&[f32], &[f32], bool),
         footprint: &std::sync::Arc<Footprint>,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> (Prepared<W>, u64) {
@@ -465,72 +483,14 @@ impl ChainSettings {
         for (k, shared, r, seconds) in results {
             rays += r;
             let splats = (0..shared.count()).map(|_| SharedSplats::filtered(footprint)).collect();
-            prepared[k] = Some(Group { shared: Some(shared), splats, seconds });
+            // Halves need a walker in each.
+            let odd = if halves && plan.iter().any(|s| s.group == k && s.index == 1) {
+                (0..shared.count()).map(|_| SharedSplats::filtered(footprint)).collect()
+            } else {
+                Vec::new()
+            };
+            prepared[k] = Some(Group { shared: Some(shared), splats, odd, seconds });
         }
         (prepared, rays)
-    }
-
-    /// The independent samples combined with the chains ([`super::hybrid`]), none without
-    /// [`Self::hybrid`]: `ratio` of the main-chain mutations (a fixed budget's, or a round's),
-    /// dealt to as many walkers as a group has chains, covering every depth not sampled
-    /// independently instead of by chains.
-    #[allow(clippy::too_many_arguments)]
-    fn hybrid_plan(
-        &self,
-        boots: &[Bootstrap],
-        plan: &[Slot],
-        independent: &[bool],
-        fixed: bool,
-        round_quota: &dyn Fn(&Slot) -> u64,
-        footprint: &std::sync::Arc<Footprint>,
-    ) -> HybridPlan {
-        let mut mutations = vec![0u64; boots.len()];
-        for slot in plan {
-            mutations[slot.group] += if fixed { slot.quota() } else { round_quota(slot) };
-        }
-        let total: u64 = mutations.iter().sum();
-        if self.hybrid <= 0.0 || total == 0 {
-            return HybridPlan::default();
-        }
-        let samples = ((self.hybrid * total as f64).round() as u64).max(1);
-        let depths: Vec<HybridDepth> = (0..boots.len())
-            .filter(|&k| !independent[k])
-            .map(|k| HybridDepth::new(k, boots[k].b(), (mutations[k], self.chain_efficiency), samples, boots[k].clamp))
-            .collect();
-        let walkers = (self.chains as u64).min(samples).max(1);
-        let plan = (0..walkers)
-            .map(|index| Slot { group: 0, index: index as usize, walkers, budget: Some(samples) })
-            .collect();
-        let layers = if self.group_images { depths.len() } else { 1 };
-        let mean: f64 = boots.iter().map(Bootstrap::b).sum();
-        let film = HybridFilm::new(layers, footprint, mean);
-        HybridPlan { depths, plan, film }
-    }
-}
-
-/// The independent samples a render combines with its chains ([`super::hybrid`]).
-struct HybridPlan {
-    /// The depths they cover, with their weights.
-    depths: Vec<HybridDepth>,
-    /// Their walkers, each with its share of the samples (of a round, under a time budget).
-    plan: Vec<Slot>,
-    /// Where they splat.
-    film: HybridFilm,
-}
-
-impl Default for HybridPlan {
-    fn default() -> Self {
-        Self { depths: Vec::new(), plan: Vec::new(), film: HybridFilm { buffers: Vec::new(), scale: 1.0 } }
-    }
-}
-
-impl HybridPlan {
-    /// Each group's chains' level ([`GroupContext::mis_level`]).
-    fn levels(&self, groups: usize) -> Vec<f32> {
-        let mut levels = vec![0.0; groups];
-        for d in self.depths.iter().filter(|d| d.level.is_finite()) {
-            levels[d.k] = d.level;
-        }
-        levels
     }
 }

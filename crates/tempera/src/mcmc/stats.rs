@@ -52,6 +52,10 @@ pub struct DepthStats {
     /// Samples of bidirectional path tracing combined with the chains ([`super::hybrid`]);
     /// each covers every depth, and all are counted in depth 0's row.
     pub hybrid_samples: u64,
+    /// What one of the group's main-chain mutations is worth in independent samples of the
+    /// chains' own density, as measured from the walkers' halves ([`super::efficiency`]; 0: not
+    /// measured). Set when the image is developed.
+    pub measured_efficiency: f64,
 }
 
 impl DepthStats {

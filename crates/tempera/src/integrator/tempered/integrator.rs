@@ -76,6 +76,9 @@ pub struct TemperedIntegrator {
     pub hybrid: f64,
     /// What a main-chain mutation counts as in [`Self::hybrid`]'s weights.
     pub chain_efficiency: f64,
+    /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
+    /// ([`crate::mcmc::efficiency`]).
+    pub measure_efficiency: bool,
     /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
     /// image.
     pub depth_images: bool,
@@ -120,6 +123,7 @@ impl TemperedIntegrator {
             hot_weight: 1.0,
             hybrid: 0.0,
             chain_efficiency: crate::mcmc::hybrid::DEFAULT_EFFICIENCY,
+            measure_efficiency: false,
             depth_images: false,
             independent_below: 0,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
@@ -250,7 +254,8 @@ impl Integrator for TemperedIntegrator {
             .with_independent_below(self.independent_below)
             .with_normaliser_share(self.normaliser_share)
             .with_hybrid(self.hybrid)
-            .with_chain_efficiency(self.chain_efficiency);
+            .with_chain_efficiency(self.chain_efficiency)
+            .with_measured_efficiency(self.measure_efficiency);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
@@ -263,8 +268,10 @@ impl Integrator for TemperedIntegrator {
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
         let depths = u64::from(self.max_depth) + 1;
         let hybrid = crate::mcmc::hybrid::film_buffers(self.hybrid, self.depth_images, depths);
+        // With the efficiency measured, the odd walkers' buffers of every depth.
+        let halves = if self.measure_efficiency { 2 } else { 1 };
         pixels(scene)
-            .saturating_mul(12 + images + (depths * layers + hybrid) * SHARED_SPLAT_BYTES)
+            .saturating_mul(12 + images + (halves * depths * layers + hybrid) * SHARED_SPLAT_BYTES)
             .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
     }
 }
