@@ -233,7 +233,7 @@ pub(super) fn develop<L: Layers>(
             let level = hybrid
                 .and_then(|(depths, _)| depths.iter().find(|x| x.k == k))
                 .map_or(0.0, |x| if x.level.is_finite() { x.level } else { 0.0 });
-            let g2 = second_moment(&boot.values, boot.clamp, level);
+            let g2 = second_moment(&boot.values, level);
             let mutations = halves[k];
             d.measured_efficiency = Halves { even, odd, mutations }.efficiency(d.b, g2, kappa).unwrap_or(0.0);
         }
