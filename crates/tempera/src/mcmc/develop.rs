@@ -174,12 +174,10 @@ pub(super) fn develop<L: Layers>(
             continue;
         };
         let buffers = summed.map_or(group.splats.as_slice(), |s| s[k].as_slice());
-        invalid += d.invalid
-            + buffers.iter().map(SharedSplats::invalid).sum::<u64>()
-            + if summed.is_some() { 0 } else { group.odd.iter().map(SharedSplats::invalid).sum::<u64>() };
         // The odd walkers' splats where they went to buffers of their own ([`Group::odd`]).
         let (buffers, odd) =
             if summed.is_some() { buffers.split_at(group.splats.len()) } else { (buffers, group.odd.as_slice()) };
+        invalid += d.invalid + buffers.iter().chain(odd).map(SharedSplats::invalid).sum::<u64>();
         d.replica_b_ratios = group.shared.ratios().iter().map(|&r| r as f32).collect();
         d.prepare_seconds = group.seconds;
         if d.mutations == 0 {

@@ -26,10 +26,10 @@
 //! the fixed budget's), with `b_k` from the bootstrap, and develops with the counts made.
 //!
 //! Kelemen et al. 2002 weigh a chain's own large steps against its states so; here the
-//! independent samples are whole BDPT samples, which serve every depth at once: where the chains' density is low (dim parts
-//! of the image, which MMLT, allotting mutations by brightness, visits rarely) the independent
-//! samples carry the estimate as BDPT does; where a bright, hard-to-find path family holds the
-//! chains, they carry it. In parallel tempering's terms the independent samples are a replica
+//! independent samples are whole BDPT samples, which serve every depth at once: where the
+//! chains' density is low (dim parts of the image, which MMLT, allotting mutations by
+//! brightness, visits rarely) the independent samples carry the estimate as BDPT does; where a
+//! bright, hard-to-find path family holds the chains, they carry it. In parallel tempering's terms the independent samples are a replica
 //! at inverse temperature 0 sampled exactly (Syed et al. 2022), kept apart from the swaps.
 //!
 //! Where the chains' target is clamped at `c` ([`super::ChainSettings::clamp`]), `f` is the
