@@ -58,6 +58,10 @@ pub struct IntegratorFlags {
     /// a chain's successive states are correlated)
     #[arg(long, value_name = "E")]
     pub chain_efficiency: Option<f64>,
+    /// MMLT and tempered MMLT with --hybrid: instead of --chain-efficiency, weights that give
+    /// the BDPT samples the share S (between 0 and 1) of each depth's light
+    #[arg(long, value_name = "S")]
+    pub hybrid_share: Option<f64>,
     /// MMLT and tempered MMLT: measure what a mutation of each depth's chains is worth in
     /// independent samples, from two halves of the chains (reported by --stats as
     /// `measured_efficiency`; the depths' splat buffers take twice the memory)
@@ -174,6 +178,7 @@ impl IntegratorFlags {
             target_clamp: self.target_clamp,
             hybrid: self.hybrid,
             chain_efficiency: self.chain_efficiency,
+            hybrid_share: self.hybrid_share,
             measure_efficiency: self.measure_efficiency.then_some(true),
             replicas: self.replicas,
             swap: self.swap,

@@ -12,7 +12,8 @@ fn mean(img: &Image) -> f64 {
 
 /// Agreement with BDPT on a Cornell box, block by block, with the weights leaning on the
 /// independent samples (a mutation worth a thousandth of a sample), balanced (1), and on the
-/// chains (100): the chains' and the samples' weights sum to one at every point only if both
+/// chains (100), and with weights that give the samples 5 % and 95 % of each depth's light
+/// ([`crate::mcmc::hybrid::HybridDepth::with_share`]): the chains' and the samples' weights sum to one at every point only if both
 /// value it alike (the chains' `f` is the strategy's luminance times the depth's `n`
 /// strategies, and depth 0 has one), so a mismatch shows as a bias wherever both carry light.
 #[test]
@@ -20,15 +21,29 @@ fn hybrid_mmlt_agrees_with_bdpt_on_a_cornell_box() {
     let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
     let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
     let b = block_stats(&bdpt.image, 16);
-    for efficiency in [1e-3, 1.0, 100.0] {
-        let m =
-            MmltIntegrator { bootstrap: 100_000, hybrid: 0.25, chain_efficiency: efficiency, ..MmltIntegrator::new(5) };
+    let weights = [(1e-3, None), (1.0, None), (100.0, None), (1.0, Some(0.05)), (1.0, Some(0.95))];
+    for (efficiency, sample_share) in weights {
+        let m = MmltIntegrator {
+            bootstrap: 100_000,
+            hybrid: 0.25,
+            chain_efficiency: efficiency,
+            sample_share,
+            ..MmltIntegrator::new(5)
+        };
         let out = render_with(&scene, &m, Budget::Samples(1024), 2, 0);
         let a = block_stats(&out.image, 16);
         let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
-        assert!((mean(&a) / mean(&b) - 1.0).abs() < 0.01, "{efficiency}: image means {} vs {}", mean(&a), mean(&b));
+        assert!(
+            (mean(&a) / mean(&b) - 1.0).abs() < 0.01,
+            "{efficiency} {sample_share:?}: image means {} vs {}",
+            mean(&a),
+            mean(&b)
+        );
         for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
-            assert!((ma - mb).abs() < 4.0 * sb + 0.03 * mb, "{efficiency}, block {i}: hybrid {ma} vs bdpt {mb} ± {sb}");
+            assert!(
+                (ma - mb).abs() < 4.0 * sb + 0.03 * mb,
+                "{efficiency} {sample_share:?}, block {i}: hybrid {ma} vs bdpt {mb} ± {sb}"
+            );
         }
         // A quarter of a sample per mutation, counted in depth 0's row.
         let samples: u64 = out.chains.iter().map(|d| d.hybrid_samples).sum();

@@ -41,6 +41,9 @@ pub struct MmltIntegrator {
     pub hybrid: f64,
     /// What a main-chain mutation counts as in the weights of [`Self::hybrid`]'s combination.
     pub chain_efficiency: f64,
+    /// Instead of [`Self::chain_efficiency`], weights that give the BDPT samples this share of
+    /// each depth's light ([`crate::mcmc::hybrid::HybridDepth::with_share`]).
+    pub sample_share: Option<f64>,
     /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
@@ -61,6 +64,7 @@ impl MmltIntegrator {
             target_clamp: 0.0,
             hybrid: 0.0,
             chain_efficiency: crate::mcmc::hybrid::DEFAULT_EFFICIENCY,
+            sample_share: None,
             measure_efficiency: false,
         }
     }
@@ -135,6 +139,7 @@ impl Integrator for MmltIntegrator {
             .with_clamp(self.target_clamp)
             .with_hybrid(self.hybrid)
             .with_chain_efficiency(self.chain_efficiency)
+            .with_sample_share(self.sample_share)
             .with_measured_efficiency(self.measure_efficiency);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {

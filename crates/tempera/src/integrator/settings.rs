@@ -180,6 +180,10 @@ pub struct IntegratorSettings {
     /// independent samples at the same density, in the weights of the combination.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub chain_efficiency: Option<f64>,
+    /// MMLT and tempered MMLT with `hybrid`: instead of `chain_efficiency`, weights that give
+    /// the BDPT samples this share (in `(0, 1)`) of each depth's light.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hybrid_share: Option<f64>,
     /// MMLT and tempered MMLT: measure each depth's chain efficiency (what a mutation is worth
     /// in independent samples) from two halves of its chains, for the statistics.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -301,6 +305,7 @@ impl IntegratorSettings {
             ("target_clamp", self.target_clamp.is_some(), kind == Mmlt),
             ("hybrid", self.hybrid.is_some(), kind == Mmlt || tempered),
             ("chain_efficiency", self.chain_efficiency.is_some(), kind == Mmlt || tempered),
+            ("hybrid_share", self.hybrid_share.is_some(), kind == Mmlt || tempered),
             ("measure_efficiency", self.measure_efficiency.is_some(), kind == Mmlt || tempered),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
@@ -371,6 +376,9 @@ impl IntegratorSettings {
         check_range("normaliser_share", self.normaliser_share, 0.0..=1.0)?;
         if self.hybrid.is_some_and(|r| !(0.0..=100.0).contains(&r)) {
             return Err("hybrid must be between 0 and 100 samples per mutation".into());
+        }
+        if self.hybrid_share.is_some_and(|s| !(s > 0.0 && s < 1.0)) {
+            return Err("hybrid_share must be above 0 and below 1".into());
         }
         if self.chain_efficiency.is_some_and(|e| !(e > 0.0 && e <= 100.0)) {
             return Err("chain_efficiency must be above 0 and at most 100".into());
@@ -464,6 +472,7 @@ pub fn create(
                 target_clamp: s.target_clamp.unwrap_or(m.target_clamp),
                 hybrid: s.hybrid.unwrap_or(m.hybrid),
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
+                sample_share: s.hybrid_share.or(m.sample_share),
                 measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
                 depth_images: s.depth_images,
                 ..m
@@ -507,6 +516,7 @@ pub fn create(
                 hot_weight: s.hot_weight.unwrap_or(m.hot_weight),
                 hybrid: s.hybrid.unwrap_or(m.hybrid),
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
+                sample_share: s.hybrid_share.or(m.sample_share),
                 measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
                 depth_images: s.depth_images,
                 ..m

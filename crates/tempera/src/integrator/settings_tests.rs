@@ -56,6 +56,16 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
             "chain_efficiency must be",
         ),
         (IntegratorKind::Pssmlt, IntegratorSettings { hybrid: Some(0.1), ..Default::default() }, "hybrid is not"),
+        (
+            IntegratorKind::Mmlt,
+            IntegratorSettings { hybrid_share: Some(1.0), ..Default::default() },
+            "hybrid_share must",
+        ),
+        (
+            IntegratorKind::Pssmlt,
+            IntegratorSettings { hybrid_share: Some(0.5), ..Default::default() },
+            "hybrid_share is not",
+        ),
         (IntegratorKind::Sppm, IntegratorSettings { radius: Some(-1.0), ..Default::default() }, "radius must be"),
         (IntegratorKind::Sppm, IntegratorSettings { photons: Some(0), ..Default::default() }, "photons must lie"),
         (IntegratorKind::Mmlt, IntegratorSettings { collapse_above: Some(0.5), ..Default::default() }, "not a setting"),

@@ -66,6 +66,9 @@ pub struct ChainSettings {
     /// What a main-chain mutation counts as in those weights, in independent samples at the
     /// same density: a chain's successive states are correlated.
     pub chain_efficiency: f64,
+    /// Instead of weights from [`Self::chain_efficiency`], the share of each depth's light the
+    /// independent samples carry ([`super::hybrid::HybridDepth::with_share`]).
+    pub sample_share: Option<f64>,
     /// Measure each group's chain efficiency: its walkers of odd index splat into buffers of
     /// their own ([`Group::odd`]; [`super::efficiency`]), developed with the others.
     pub measure_efficiency: bool,
@@ -121,6 +124,7 @@ impl ChainSettings {
             clamp: 0.0,
             hybrid: 0.0,
             chain_efficiency: super::hybrid::DEFAULT_EFFICIENCY,
+            sample_share: None,
             measure_efficiency: false,
         }
     }
@@ -136,6 +140,12 @@ impl ChainSettings {
     /// in the weights of [`Self::with_hybrid`].
     pub fn with_chain_efficiency(self, efficiency: f64) -> Self {
         Self { chain_efficiency: efficiency, ..self }
+    }
+
+    /// These settings with the independent samples of [`Self::with_hybrid`] weighted to carry
+    /// `share` of each depth's light (`None`: weights from the chain efficiency).
+    pub fn with_sample_share(self, share: Option<f64>) -> Self {
+        Self { sample_share: share, ..self }
     }
 
     /// These settings with each group's chain efficiency measured when `on` is set

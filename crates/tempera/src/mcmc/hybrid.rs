@@ -25,6 +25,13 @@
 //! the weights assume; the render fixes them before its first mutation (the rounds' shares, or
 //! the fixed budget's), with `b_k` from the bootstrap, and develops with the counts made.
 //!
+//! Instead of from the counts and `e`, the level may be set from the share `π` of each depth's
+//! light the samples are to carry ([`HybridDepth::with_share`]): a point of value `f` carries
+//! light in proportion to `f`, so over the bootstrap's uniform points the samples' share at
+//! level `h` is `Σ f·h/(f + h) / Σ f`, which grows from 0 to 1 with `h`. Those weights do not
+//! depend on the counts, so the split of the work between samples and chains is then a choice
+//! of its own.
+//!
 //! Kelemen et al. 2002 weigh a chain's own large steps against its states so; here the
 //! independent samples are whole BDPT samples, which serve every depth at once: where the
 //! chains' density is low (dim parts of the image, which MMLT, allotting mutations by
@@ -74,6 +81,28 @@ impl HybridDepth {
         let chains = chains as f64 * efficiency;
         let level = if chains > 0.0 && b > 0.0 { n * b * samples as f64 / chains } else { f64::INFINITY };
         Self { k, strategies: n as f32, level: level as f32, clamp }
+    }
+
+    /// Depth `k` with the level at which the independent samples carry `share` of the depth's
+    /// light (`share` in `(0, 1)`): the level `h` where `Σ f·h/(f + h) = share·Σ f` over the
+    /// depth's bootstrap `values` (its target's values at uniform points, each point's
+    /// contribution being its value over `n`), found by bisection on `log h`. A depth without
+    /// light gets an infinite level (its samples weigh 1).
+    pub fn with_share(k: usize, values: &[f32], share: f64, clamp: f32) -> Self {
+        let n = if k == 0 { 1.0 } else { (k + 2) as f32 };
+        let light =
+            |h: f64| values.iter().map(|&f| f64::from(f.min(clamp)) * h / (f64::from(f.min(clamp)) + h)).sum::<f64>();
+        let total: f64 = values.iter().map(|&f| f64::from(f.min(clamp))).sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return Self { k, strategies: n, level: f32::INFINITY, clamp };
+        }
+        let target = share.clamp(1e-6, 1.0 - 1e-6) * total;
+        let (mut lo, mut hi) = (-60.0f64, 60.0f64);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if light(mid.exp2()) < target { lo = mid } else { hi = mid }
+        }
+        Self { k, strategies: n, level: (0.5 * (lo + hi)).exp2() as f32, clamp }
     }
 
     /// The balance-heuristic weight of an independent sample's strategy with MIS-weighted
@@ -243,5 +272,29 @@ mod tests {
         }
         let alone = HybridDepth::new(0, 0.2, (0, 0.5), 100, f32::INFINITY);
         assert_eq!((alone.strategies, alone.weight(0.3)), (1.0, 1.0));
+    }
+
+    /// The level that gives the samples a share of the light: `h = f` halves every value's
+    /// light, the share found is the one asked for over mixed values (clamped ones at the
+    /// clamp), it grows with the share, and a depth without light weighs its samples 1.
+    #[test]
+    fn the_level_gives_the_samples_their_share_of_the_light() {
+        let even = HybridDepth::with_share(2, &[0.5; 10], 0.5, f32::INFINITY);
+        assert!((even.level - 0.5).abs() < 1e-5, "{}", even.level);
+        assert_eq!(even.strategies, 4.0);
+        let values = [0.0, 1e-3, 0.01, 0.2, 1.0, 3.0, 50.0, 0.0];
+        let mut last = 0.0;
+        for share in [0.01, 0.3, 0.7, 0.99] {
+            let d = HybridDepth::with_share(3, &values, share, 10.0);
+            let h = f64::from(d.level);
+            let f = |v: f32| f64::from(v.min(10.0));
+            let light: f64 = values.iter().map(|&v| f(v) * h / (f(v) + h)).sum();
+            let total: f64 = values.iter().map(|&v| f(v)).sum();
+            assert!((light / total - share).abs() < 1e-4, "{share}: {}", light / total);
+            assert!(h > last, "{share}");
+            last = h;
+        }
+        let dark = HybridDepth::with_share(1, &[0.0; 4], 0.5, f32::INFINITY);
+        assert!(dark.level.is_infinite() && dark.weight(0.0) == 1.0);
     }
 }

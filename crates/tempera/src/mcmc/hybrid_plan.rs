@@ -48,7 +48,10 @@ impl HybridPlan {
         let efficiency = settings.chain_efficiency;
         let depths: Vec<HybridDepth> = (0..boots.len())
             .filter(|&k| !independent[k])
-            .map(|k| HybridDepth::new(k, boots[k].b(), (mutations[k], efficiency), samples, boots[k].clamp))
+            .map(|k| match settings.sample_share {
+                Some(share) => HybridDepth::with_share(k, &boots[k].values, share, boots[k].clamp),
+                None => HybridDepth::new(k, boots[k].b(), (mutations[k], efficiency), samples, boots[k].clamp),
+            })
             .collect();
         let walkers = (settings.chains as u64).min(samples).max(1);
         let plan = (0..walkers)

@@ -76,6 +76,9 @@ pub struct TemperedIntegrator {
     pub hybrid: f64,
     /// What a main-chain mutation counts as in [`Self::hybrid`]'s weights.
     pub chain_efficiency: f64,
+    /// Instead of [`Self::chain_efficiency`], weights that give the BDPT samples this share of
+    /// each depth's light ([`crate::mcmc::hybrid::HybridDepth::with_share`]).
+    pub sample_share: Option<f64>,
     /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
@@ -123,6 +126,7 @@ impl TemperedIntegrator {
             hot_weight: 1.0,
             hybrid: 0.0,
             chain_efficiency: crate::mcmc::hybrid::DEFAULT_EFFICIENCY,
+            sample_share: None,
             measure_efficiency: false,
             depth_images: false,
             independent_below: 0,
@@ -255,6 +259,7 @@ impl Integrator for TemperedIntegrator {
             .with_normaliser_share(self.normaliser_share)
             .with_hybrid(self.hybrid)
             .with_chain_efficiency(self.chain_efficiency)
+            .with_sample_share(self.sample_share)
             .with_measured_efficiency(self.measure_efficiency);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
