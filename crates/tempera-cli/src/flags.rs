@@ -48,11 +48,12 @@ pub struct IntegratorFlags {
     /// own pixels instead of on its depth's normalisation (default 0: never)
     #[arg(long, value_name = "F")]
     pub target_clamp: Option<f64>,
-    /// MMLT: R samples of bidirectional path tracing per main-chain mutation, combined with
-    /// the chains by multiple importance sampling: the samples carry the dim parts of the
-    /// image, the chains the bright, hard-to-find paths (default 0: the chains alone)
-    #[arg(long, value_name = "R")]
-    pub hybrid: Option<f64>,
+    /// MMLT and tempered MMLT: R samples of bidirectional path tracing per main-chain
+    /// mutation, combined with the chains by multiple importance sampling: the samples carry
+    /// the dim parts of the image, the chains the bright, hard-to-find paths (default 0: the
+    /// chains alone); `auto`: the split and the weights a short pilot measures
+    #[arg(long, value_name = "R|auto")]
+    pub hybrid: Option<tempera::integrator::Hybrid>,
     /// MMLT and tempered MMLT with --hybrid: what a main-chain mutation counts as, in
     /// independent samples at the same density, in the combination's weights (default 0.01:
     /// a chain's successive states are correlated)

@@ -44,6 +44,9 @@ pub struct MmltIntegrator {
     /// Instead of [`Self::chain_efficiency`], weights that give the BDPT samples this share of
     /// each depth's light ([`crate::mcmc::hybrid::HybridDepth::with_share`]).
     pub sample_share: Option<f64>,
+    /// Choose [`Self::hybrid`] and [`Self::sample_share`] by a pilot
+    /// ([`crate::integrator::hybrid_pilot`]).
+    pub hybrid_auto: bool,
     /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
@@ -65,6 +68,7 @@ impl MmltIntegrator {
             hybrid: 0.0,
             chain_efficiency: crate::mcmc::hybrid::DEFAULT_EFFICIENCY,
             sample_share: None,
+            hybrid_auto: false,
             measure_efficiency: false,
         }
     }
@@ -129,6 +133,12 @@ impl Integrator for MmltIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        if self.hybrid_auto {
+            let chains = Self { hybrid_auto: false, hybrid: 0.0, ..*self };
+            return super::hybrid_pilot::render(&chains, self.max_depth, scene, settings, control, |c, s, cx| {
+                Self { hybrid: c.ratio, chain_efficiency: c.efficiency, ..chains }.render(scene, s, cx)
+            });
+        }
         control.check_memory(self.memory_estimate(scene, settings.threads), "a splat buffer per path depth")?;
         let depths = self.max_depth as usize + 1;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)

@@ -3,6 +3,7 @@
 //! driver in [`tiles`].
 
 pub mod bdpt;
+pub mod hybrid_pilot;
 pub mod memory;
 pub mod mmlt;
 pub mod path;
@@ -37,7 +38,8 @@ pub use path::PathIntegrator;
 pub use pssmlt::PssmltIntegrator;
 pub use run_stats::RunStats;
 pub use settings::{
-    Allocation, Flattening, IntegratorKind, IntegratorSettings, LadderTuning, ReplicaSplats, Swap, TemperedMis, create,
+    Allocation, Flattening, Hybrid, IntegratorKind, IntegratorSettings, LadderTuning, ReplicaSplats, Swap, TemperedMis,
+    create,
 };
 pub use sppm::{PhotonSampler, SppmIntegrator};
 pub use tempered::TemperedIntegrator;
@@ -66,6 +68,7 @@ pub struct RenderSettings {
 
 /// Interaction with a running render: a cancellation flag (Ctrl-C), a progress callback that
 /// receives increments of completed pixel samples, and snapshots of the image so far.
+#[derive(Clone, Copy)]
 pub struct RenderControl<'a> {
     pub cancel: &'a AtomicBool,
     pub on_progress: &'a (dyn Fn(u64) + Sync),

@@ -91,6 +91,50 @@ pub enum TemperedMis {
     Roughened,
 }
 
+/// How many BDPT samples MMLT and tempered MMLT combine with their chains: a fixed ratio
+/// per main-chain mutation, or the split a short pilot measures ([`super::hybrid_pilot`]).
+/// Written as a number or `"auto"`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Hybrid {
+    Ratio(f64),
+    Auto(AutoWord),
+}
+
+/// The word `auto`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AutoWord {
+    Auto,
+}
+
+impl Hybrid {
+    /// The fixed ratio (0 with `auto`, whose ratio the pilot chooses).
+    pub fn ratio(self) -> f64 {
+        match self {
+            Hybrid::Ratio(r) => r,
+            Hybrid::Auto(_) => 0.0,
+        }
+    }
+
+    pub fn is_auto(self) -> bool {
+        matches!(self, Hybrid::Auto(_))
+    }
+}
+
+impl std::str::FromStr for Hybrid {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s.eq_ignore_ascii_case("auto") {
+            return Ok(Hybrid::Auto(AutoWord::Auto));
+        }
+        s.parse()
+            .map(Hybrid::Ratio)
+            .map_err(|_| format!("expected a number of samples per mutation or `auto`, got `{s}`"))
+    }
+}
+
 /// How MMLT and tempered MMLT allot mutations to path depths.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
@@ -175,7 +219,7 @@ pub struct IntegratorSettings {
     /// MMLT: samples of bidirectional path tracing per main-chain mutation, combined with the
     /// chains by multiple importance sampling (0: the chains alone).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub hybrid: Option<f64>,
+    pub hybrid: Option<Hybrid>,
     /// MMLT and tempered MMLT with `hybrid`: what a main-chain mutation counts as, in
     /// independent samples at the same density, in the weights of the combination.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -374,7 +418,7 @@ impl IntegratorSettings {
         check_probability("collapse_above", self.collapse_above)?;
         check_probability("collapse_below", self.collapse_below)?;
         check_range("normaliser_share", self.normaliser_share, 0.0..=1.0)?;
-        if self.hybrid.is_some_and(|r| !(0.0..=100.0).contains(&r)) {
+        if self.hybrid.is_some_and(|r| !(0.0..=100.0).contains(&r.ratio())) {
             return Err("hybrid must be between 0 and 100 samples per mutation".into());
         }
         if self.hybrid_share.is_some_and(|s| !(s > 0.0 && s < 1.0)) {
@@ -470,7 +514,8 @@ pub fn create(
                 independent_below: s.independent_below.unwrap_or(m.independent_below),
                 normaliser_share: s.normaliser_share.unwrap_or(m.normaliser_share),
                 target_clamp: s.target_clamp.unwrap_or(m.target_clamp),
-                hybrid: s.hybrid.unwrap_or(m.hybrid),
+                hybrid: s.hybrid.map_or(m.hybrid, Hybrid::ratio),
+                hybrid_auto: s.hybrid.is_some_and(Hybrid::is_auto),
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
                 sample_share: s.hybrid_share.or(m.sample_share),
                 measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
@@ -514,7 +559,8 @@ pub fn create(
                 hot_every: s.hot_every.unwrap_or(m.hot_every),
                 hot_large_step: s.hot_large_step.or(m.hot_large_step),
                 hot_weight: s.hot_weight.unwrap_or(m.hot_weight),
-                hybrid: s.hybrid.unwrap_or(m.hybrid),
+                hybrid: s.hybrid.map_or(m.hybrid, Hybrid::ratio),
+                hybrid_auto: s.hybrid.is_some_and(Hybrid::is_auto),
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
                 sample_share: s.hybrid_share.or(m.sample_share),
                 measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),

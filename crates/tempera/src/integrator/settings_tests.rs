@@ -48,14 +48,26 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
             "collapse_above must be a probability",
         ),
         (IntegratorKind::Mmlt, IntegratorSettings { photons: Some(10), ..Default::default() }, "photons is not"),
-        (IntegratorKind::Mmlt, IntegratorSettings { hybrid: Some(-0.1), ..Default::default() }, "hybrid must be"),
-        (IntegratorKind::Mmlt, IntegratorSettings { hybrid: Some(f64::NAN), ..Default::default() }, "hybrid must be"),
+        (
+            IntegratorKind::Mmlt,
+            IntegratorSettings { hybrid: Some(Hybrid::Ratio(-0.1)), ..Default::default() },
+            "hybrid must be",
+        ),
+        (
+            IntegratorKind::Mmlt,
+            IntegratorSettings { hybrid: Some(Hybrid::Ratio(f64::NAN)), ..Default::default() },
+            "hybrid must be",
+        ),
         (
             IntegratorKind::Tempered,
             IntegratorSettings { chain_efficiency: Some(0.0), ..Default::default() },
             "chain_efficiency must be",
         ),
-        (IntegratorKind::Pssmlt, IntegratorSettings { hybrid: Some(0.1), ..Default::default() }, "hybrid is not"),
+        (
+            IntegratorKind::Pssmlt,
+            IntegratorSettings { hybrid: Some(Hybrid::Ratio(0.1)), ..Default::default() },
+            "hybrid is not",
+        ),
         (
             IntegratorKind::Mmlt,
             IntegratorSettings { hybrid_share: Some(1.0), ..Default::default() },
@@ -95,4 +107,17 @@ fn names_round_trip() {
     }
     assert_eq!(IntegratorKind::from_name("sppm"), Some(IntegratorKind::Sppm));
     assert_eq!(IntegratorKind::from_name("vcm"), None);
+}
+
+/// `hybrid` is a ratio or the word `auto`, on the command line and in settings files.
+#[test]
+fn hybrid_is_a_ratio_or_auto() {
+    assert_eq!("0.25".parse::<Hybrid>(), Ok(Hybrid::Ratio(0.25)));
+    assert!("Auto".parse::<Hybrid>().is_ok_and(Hybrid::is_auto));
+    assert!("often".parse::<Hybrid>().unwrap_err().contains("`auto`"));
+    let parsed: IntegratorSettings = serde_json::from_str(r#"{"hybrid": "auto"}"#).unwrap();
+    assert!(parsed.hybrid.is_some_and(Hybrid::is_auto));
+    let parsed: IntegratorSettings = serde_json::from_str(r#"{"hybrid": 0.5}"#).unwrap();
+    assert_eq!(parsed.hybrid, Some(Hybrid::Ratio(0.5)));
+    assert!(serde_json::from_str::<IntegratorSettings>(r#"{"hybrid": "sometimes"}"#).is_err());
 }

@@ -279,6 +279,7 @@ impl ChainSettings {
         let seed = settings.seed;
         let (w, h) = (scene.film.width, scene.film.height);
         let pixels = u64::from(w) * u64::from(h);
+        let started = std::time::Instant::now();
         let (mut boots, mut total_rays) = self.bootstrap(seed, groups, targets)?;
         let total: f64 = boots.iter().map(|b| self.weight(b)).sum();
         let shares: Vec<f64> = boots.iter().map(|b| self.weight(b) / total).collect();
@@ -333,6 +334,7 @@ impl ChainSettings {
         let (mut prepared, rays) =
             self.prepare(&plan, &mut walkers, seed, (&clamps, &levels, self.measure_efficiency), &footprint, &stop);
         total_rays += rays;
+        let setup = (started.elapsed().as_secs_f64(), total_rays);
         for slot in &iplan {
             prepared[slot.group].get_or_insert_with(|| Group {
                 shared: None,
@@ -406,7 +408,7 @@ impl ChainSettings {
                 cluster.is_distributed().then(|| hybrid.film.with_buffers(sum_buffers(cluster, &hybrid.film.buffers)));
             let independent_image = (!hybrid.depths.is_empty())
                 .then(|| (hybrid.depths.as_slice(), hybrid_summed.as_ref().unwrap_or(&hybrid.film)));
-            let out = develop(
+            let mut out = develop(
                 boots,
                 &reports,
                 &slots,
@@ -415,6 +417,9 @@ impl ChainSettings {
                 (w, h),
                 (self.group_images, kappa),
             );
+            if let Some(first) = out.chains.first_mut() {
+                (first.setup_seconds, first.setup_rays) = setup;
+            }
             RenderOutput {
                 stats: RenderStats { rays: out.stats.rays + total_rays + extra, seconds, ..out.stats },
                 ..out

@@ -56,6 +56,14 @@ pub struct DepthStats {
     /// chains' own density, as measured from the walkers' halves ([`super::efficiency`]; 0: not
     /// measured). Set when the image is developed.
     pub measured_efficiency: f64,
+    /// The time and rays the render took before its first round (every group's bootstrap and
+    /// preparation), in depth 0's row: the pilot of `--hybrid auto` measures the chains' work
+    /// without them.
+    pub setup_seconds: f64,
+    pub setup_rays: u64,
+    /// What the pilot of `--hybrid auto` measured and chose
+    /// ([`crate::integrator::hybrid_pilot`]), in depth 0's row.
+    pub hybrid_choice: Option<crate::integrator::hybrid_pilot::HybridChoice>,
 }
 
 impl DepthStats {

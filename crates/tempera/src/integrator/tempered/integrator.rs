@@ -79,6 +79,9 @@ pub struct TemperedIntegrator {
     /// Instead of [`Self::chain_efficiency`], weights that give the BDPT samples this share of
     /// each depth's light ([`crate::mcmc::hybrid::HybridDepth::with_share`]).
     pub sample_share: Option<f64>,
+    /// Choose [`Self::hybrid`] and [`Self::sample_share`] by a pilot
+    /// ([`crate::integrator::hybrid_pilot`]).
+    pub hybrid_auto: bool,
     /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
@@ -127,6 +130,7 @@ impl TemperedIntegrator {
             hybrid: 0.0,
             chain_efficiency: crate::mcmc::hybrid::DEFAULT_EFFICIENCY,
             sample_share: None,
+            hybrid_auto: false,
             measure_efficiency: false,
             depth_images: false,
             independent_below: 0,
@@ -245,6 +249,23 @@ impl Integrator for TemperedIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        if self.hybrid_auto {
+            if self.swap == Swap::Mixture {
+                return Err("--hybrid auto needs replica 0 alone writing the image: no mixture chains".into());
+            }
+            // Replica 0 alone writes the image the samples are combined with.
+            let chains = Self { hybrid_auto: false, hybrid: 0.0, reuse_replicas: false, ..self.clone() };
+            return super::super::hybrid_pilot::render(
+                &chains,
+                self.max_depth,
+                scene,
+                settings,
+                control,
+                |c, s, cx| {
+                    Self { hybrid: c.ratio, chain_efficiency: c.efficiency, ..chains.clone() }.render(scene, s, cx)
+                },
+            );
+        }
         if self.hybrid > 0.0 && (self.reuse_replicas || self.swap == Swap::Mixture) {
             return Err("combining the chains with bidirectional path tracing (hybrid) needs replica 0 \
                         alone writing the image: no replica reuse, no mixture chains"
