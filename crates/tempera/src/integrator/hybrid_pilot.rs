@@ -18,7 +18,9 @@
 //!
 //! A time budget gives each pilot render of the chains 4 % of it, at least 1 s (a chain's
 //! error falls faster than one over the time at first, so a shorter pilot misjudges it), and
-//! each of BDPT 1 %, at least 0.25 s; the render gets the rest. A fixed budget gives each
+//! each of BDPT 1 %, at least 0.25 s, but never more than half of the budget in all (below 10 s
+//! the pilot is shorter than it should be and its choice less sure); the render gets the rest,
+//! and at least half of the budget where the pilot overran its share. A fixed budget gives each
 //! pilot render of the chains 2 % of the mutations (at least one per pixel) and each of BDPT
 //! an eighth of that in samples, and measures work in rays, so that the choice, and the
 //! image, do not depend on the machine or the thread count. The chains' work leaves out their
@@ -29,13 +31,13 @@ use crate::math::luminance;
 use crate::scene::Scene;
 use std::time::{Duration, Instant};
 
-/// The share of a time budget each pilot render of the chains takes, and its least length in
-/// seconds: a chain's error falls faster than one over the time at first, so a shorter pilot
-/// misjudges it.
-const CHAIN_TIME: (f64, f64) = (0.04, 1.0);
+/// The share of a time budget each pilot render of the chains takes, its least length in
+/// seconds (a chain's error falls faster than one over the time at first, so a shorter pilot
+/// misjudges it) and its greatest share (a short budget keeps at least half for the render).
+const CHAIN_TIME: (f64, f64, f64) = (0.04, 1.0, 0.2);
 /// The same for each pilot render of BDPT, whose error falls as one over the time from the
 /// start.
-const BDPT_TIME: (f64, f64) = (0.01, 0.25);
+const BDPT_TIME: (f64, f64, f64) = (0.01, 0.25, 0.05);
 /// The share of a fixed budget's mutations each pilot render of the chains makes.
 const SAMPLE_SHARE: f64 = 0.02;
 /// The bounds of the samples' share of the work.
@@ -154,8 +156,9 @@ pub fn choose(
     let pilot_control = RenderControl { on_progress: &quiet, snapshots: &[], ..*control };
     let (chain_budget, bdpt_budget, by_time) = match settings.budget {
         Budget::Time(t) => {
-            let each = |(share, least): (f64, f64)| {
-                Budget::Time(Duration::from_secs_f64((t.as_secs_f64() * share).max(least)))
+            let t = t.as_secs_f64();
+            let each = |(share, least, most): (f64, f64, f64)| {
+                Budget::Time(Duration::from_secs_f64((t * share).max(least).min(t * most)))
             };
             (each(CHAIN_TIME), each(BDPT_TIME), true)
         }
@@ -202,7 +205,9 @@ pub fn choose(
     let seconds = start.elapsed().as_secs_f64();
     let choice = HybridChoice::from_ratio(rho, (samples.rate(), walks.rate()), seconds);
     let budget = match settings.budget {
-        Budget::Time(t) => Budget::Time(t.saturating_sub(start.elapsed())),
+        // At least half the budget: a pilot that overran it (budgets of a second or less,
+        // where the chains' bootstrap alone takes longer) makes the render late, not empty.
+        Budget::Time(t) => Budget::Time(t.saturating_sub(start.elapsed()).max(t / 2)),
         fixed => fixed,
     };
     Ok((choice, RenderSettings { budget, ..*settings }))
