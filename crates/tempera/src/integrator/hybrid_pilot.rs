@@ -43,8 +43,8 @@ const SAMPLE_SHARE: f64 = 0.02;
 /// The bounds of the samples' share of the work.
 const SHARE_RANGE: (f64, f64) = (0.05, 0.9);
 
-/// What the pilot chose.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// What the pilot chose (`--stats` writes it in depth 0's row as `hybrid_pilot`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HybridChoice {
     /// BDPT's relative variance per unit of work over the chains' (`ρ`).
     pub variance_ratio: f64,

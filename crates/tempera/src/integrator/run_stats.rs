@@ -119,7 +119,7 @@ pub struct DepthRecord {
     pub measured_efficiency: f64,
     /// What the pilot of `--hybrid auto` measured and chose (depth 0's row only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub hybrid_pilot: Option<HybridPilotRecord>,
+    pub hybrid_pilot: Option<super::hybrid_pilot::HybridChoice>,
     /// How unevenly the depth's light is spread over its paths: `sqrt(E[f²]/E[f]²)` over the
     /// bootstrap's non-zero values, capped at 8 (mutations may be allotted by `b` times it).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -221,13 +221,7 @@ impl DepthRecord {
             independent: d.independent,
             hybrid_samples: d.hybrid_samples,
             measured_efficiency: d.measured_efficiency,
-            hybrid_pilot: d.hybrid_choice.map(|c| HybridPilotRecord {
-                variance_ratio: c.variance_ratio,
-                work_share: c.work_share,
-                ratio: c.ratio,
-                efficiency: c.efficiency,
-                seconds: c.seconds,
-            }),
+            hybrid_pilot: d.hybrid_choice,
             spread: d.spread,
             mutations: d.mutations,
             acceptance: Acceptance {
@@ -282,17 +276,4 @@ mod tests {
         assert_eq!(serde_json::to_string(&Depth::All).unwrap(), "\"all\"");
         assert!(serde_json::from_str::<Depth>("\"some\"").is_err());
     }
-}
-
-/// The pilot of `--hybrid auto` ([`super::hybrid_pilot`]): BDPT's relative variance per unit of
-/// work over the chains', the samples' share of the work it chose, the BDPT samples per
-/// main-chain mutation that share makes, what a mutation counts as in the weights, and the
-/// pilot's time.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct HybridPilotRecord {
-    pub variance_ratio: f64,
-    pub work_share: f64,
-    pub ratio: f64,
-    pub efficiency: f64,
-    pub seconds: f64,
 }

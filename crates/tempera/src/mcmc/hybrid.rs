@@ -36,8 +36,9 @@
 //! independent samples are whole BDPT samples, which serve every depth at once: where the
 //! chains' density is low (dim parts of the image, which MMLT, allotting mutations by
 //! brightness, visits rarely) the independent samples carry the estimate as BDPT does; where a
-//! bright, hard-to-find path family holds the chains, they carry it. In parallel tempering's terms the independent samples are a replica
-//! at inverse temperature 0 sampled exactly (Syed et al. 2022), kept apart from the swaps.
+//! bright, hard-to-find path family holds the chains, they carry it. In parallel tempering's
+//! terms the independent samples are a replica at inverse temperature 0 sampled exactly (Syed
+//! et al. 2022), kept apart from the swaps.
 //!
 //! Where the chains' target is clamped at `c` ([`super::ChainSettings::clamp`]), `f` is the
 //! clamped value, as the chains' density is.
@@ -59,6 +60,11 @@ use crate::texture::Image;
 /// number; the README gives the measurements this value was chosen by.
 pub const DEFAULT_EFFICIENCY: f64 = 0.01;
 
+/// The strategies of depth `k`: 1 at depth 0 (emitters seen directly), `k + 2` beyond.
+fn strategies(k: usize) -> f32 {
+    if k == 0 { 1.0 } else { (k + 2) as f32 }
+}
+
 /// How one depth's share of an independent sample is weighted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HybridDepth {
@@ -77,7 +83,7 @@ impl HybridDepth {
     /// their rates), whose chains' target has mean `b` and is clamped at `clamp`; a mutation
     /// counts as `efficiency` independent points at the same density.
     pub fn new(k: usize, b: f64, (chains, efficiency): (u64, f64), samples: u64, clamp: f32) -> Self {
-        let n = if k == 0 { 1.0 } else { (k + 2) as f64 };
+        let n = f64::from(strategies(k));
         let chains = chains as f64 * efficiency;
         let level = if chains > 0.0 && b > 0.0 { n * b * samples as f64 / chains } else { f64::INFINITY };
         Self { k, strategies: n as f32, level: level as f32, clamp }
@@ -89,10 +95,10 @@ impl HybridDepth {
     /// contribution being its value over `n`), found by bisection on `log h`. A depth without
     /// light gets an infinite level (its samples weigh 1).
     pub fn with_share(k: usize, values: &[f32], share: f64, clamp: f32) -> Self {
-        let n = if k == 0 { 1.0 } else { (k + 2) as f32 };
-        let light =
-            |h: f64| values.iter().map(|&f| f64::from(f.min(clamp)) * h / (f64::from(f.min(clamp)) + h)).sum::<f64>();
-        let total: f64 = values.iter().map(|&f| f64::from(f.min(clamp))).sum();
+        let n = strategies(k);
+        let values: Vec<f64> = values.iter().map(|&f| f64::from(f.min(clamp))).collect();
+        let light = |h: f64| values.iter().map(|&f| f * h / (f + h)).sum::<f64>();
+        let total: f64 = values.iter().sum();
         if !(total > 0.0 && total.is_finite()) {
             return Self { k, strategies: n, level: f32::INFINITY, clamp };
         }
