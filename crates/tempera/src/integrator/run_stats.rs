@@ -95,6 +95,12 @@ pub struct DepthRecord {
     pub depth: Depth,
     pub b: f64,
     pub b_rel_se: f64,
+    /// `b` as the bridge estimate gives it from the bootstrap, the large steps and the
+    /// chains' states, and its relative standard error (absent where not estimated).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub b_bridge: f64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub b_bridge_rel_se: f64,
     pub bootstrap_samples: u64,
     pub large_step_samples: u64,
     /// Non-zero values among the bootstrap samples.
@@ -214,6 +220,8 @@ impl DepthRecord {
             depth: if d.all_depths { Depth::All } else { Depth::At(d.depth) },
             b: d.b,
             b_rel_se: d.b_rel_se,
+            b_bridge: d.b_bridge,
+            b_bridge_rel_se: d.b_bridge_rel_se,
             bootstrap_samples: d.bootstrap_samples,
             large_step_samples: d.large_step_samples,
             bootstrap_nonzero: d.bootstrap_nonzero,

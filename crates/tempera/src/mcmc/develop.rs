@@ -6,6 +6,7 @@ use super::driver::{Group, Slot};
 use super::efficiency::{Halves, second_moment};
 use super::hybrid::{Hybrid, HybridDepth, HybridFilm};
 use super::independent::Independent;
+use super::stats::BridgeSums;
 use super::walker::{Layers, Walker};
 use super::{Bootstrap, DepthStats, Moments};
 use crate::cluster::{Cluster, Reader, Wire};
@@ -137,8 +138,11 @@ pub(super) fn develop<L: Layers>(
     let mut rays = 0;
     // Per group, the mutations of its walkers of even and of odd index ([`Group::odd`]).
     let mut halves = vec![(0u64, 0u64); boots.len()];
+    // Per group, each walker's sums of the bridge estimate ([`super::bridge`]).
+    let mut bridges: Vec<Vec<BridgeSums>> = vec![Vec::new(); boots.len()];
     for (report, slot) in reports.iter().zip(plan) {
         let k = slot.group;
+        bridges[k].push(report.stats.bridge);
         let half = if slot.index % 2 == 0 { &mut halves[k].0 } else { &mut halves[k].1 };
         *half += report.stats.mutations;
         stats[k].merge(&report.stats);
@@ -163,6 +167,11 @@ pub(super) fn develop<L: Layers>(
             prior.mean_and_rel_se()
         };
         (d.b, d.b_rel_se) = boot.normalisation(&large[k][0]);
+        if !d.independent
+            && let Some((b, rel)) = super::bridge::estimate(&boot.values, &bridges[k])
+        {
+            (d.b_bridge, d.b_bridge_rel_se) = (b, rel);
+        }
         d.bootstrap_samples = boot.values.len() as u64;
         d.spread = boot.spread();
         d.bootstrap_nonzero = boot.nonzero();

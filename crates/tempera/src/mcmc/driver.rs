@@ -310,6 +310,8 @@ impl ChainSettings {
         let mut hybrids: Vec<Hybrid> =
             hybrid.plan.iter().map(|slot| Hybrid::new(seed, slot.index, hybrid.plan.len())).collect();
         let levels = hybrid.levels(groups);
+        // The bridge estimates' levels: each group's bootstrap mean.
+        let bridges: Vec<f32> = boots.iter().map(|b| b.b() as f32).collect();
         // Walkers start from bootstrap states drawn in proportion to their value.
         let starts: Vec<Distribution1D> = boots.iter().map(Bootstrap::starts).collect();
         let mut walkers: Vec<W> = plan
@@ -325,14 +327,21 @@ impl ChainSettings {
                     budget: slot.budget,
                     clamp: boots[k].clamp,
                     mis_level: levels[k],
+                    bridge_level: bridges[k],
                 };
                 start_walker(StartContext { group, c, rng, starts: &starts[k], bootstrap })
             })
             .collect();
         let stop = || render.should_stop();
         let clamps: Vec<f32> = boots.iter().map(|b| b.clamp).collect();
-        let (mut prepared, rays) =
-            self.prepare(&plan, &mut walkers, seed, (&clamps, &levels, self.measure_efficiency), &footprint, &stop);
+        let (mut prepared, rays) = self.prepare(
+            &plan,
+            &mut walkers,
+            seed,
+            (&clamps, &levels, &bridges, self.measure_efficiency),
+            &footprint,
+            &stop,
+        );
         total_rays += rays;
         let setup = (started.elapsed().as_secs_f64(), total_rays);
         for slot in &iplan {
@@ -470,7 +479,7 @@ impl ChainSettings {
         plan: &[Slot],
         walkers: &mut [W],
         seed: u64,
-        (clamps, levels, halves): (&[f32], &[f32], bool),
+        (clamps, levels, bridges, halves): (&[f32], &[f32], &[f32], bool),
         footprint: &std::sync::Arc<Footprint>,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> (Prepared<W>, u64) {
@@ -488,7 +497,15 @@ impl ChainSettings {
             .with_max_len(1)
             .map(|(k, budget, group)| {
                 let start = std::time::Instant::now();
-                let cx = GroupContext { k, seed, settings: self, budget, clamp: clamps[k], mis_level: levels[k] };
+                let cx = GroupContext {
+                    k,
+                    seed,
+                    settings: self,
+                    budget,
+                    clamp: clamps[k],
+                    mis_level: levels[k],
+                    bridge_level: bridges[k],
+                };
                 let (shared, rays) = W::prepare_group(group, &cx, stop);
                 (k, shared, rays, start.elapsed().as_secs_f64())
             })

@@ -6,6 +6,7 @@
 
 pub mod all_strategies;
 pub mod bootstrap;
+pub mod bridge;
 pub mod chain;
 mod develop;
 pub mod direct;

@@ -64,6 +64,34 @@ pub struct DepthStats {
     /// What the pilot of `--hybrid auto` measured and chose
     /// ([`crate::integrator::hybrid_pilot`]), in depth 0's row.
     pub hybrid_choice: Option<crate::integrator::hybrid_pilot::HybridChoice>,
+    /// The sums of the bridge estimate of `b` ([`super::bridge`]) over the group's main chains.
+    pub bridge: BridgeSums,
+    /// `b` as the bridge estimate gives it from the bootstrap, the large steps and the chains'
+    /// states (0: not estimated), and its relative standard error. Set when the image is
+    /// developed.
+    pub b_bridge: f64,
+    pub b_bridge_rel_se: f64,
+}
+
+/// What a chain adds to the bridge estimate of its target's normalisation ([`super::bridge`])
+/// at level `h`: `1/(f + h)` over its states (in expectation over each mutation's outcome)
+/// and `f/(f + h)` over its large-step proposals (independent uniform samples).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BridgeSums {
+    /// The level `h` (0: none); the same for every chain of a group.
+    pub level: f64,
+    pub states: Moments,
+    pub uniform: Moments,
+}
+
+impl BridgeSums {
+    pub fn merge(&mut self, o: &BridgeSums) {
+        if self.level == 0.0 {
+            self.level = o.level;
+        }
+        self.states.merge(&o.states);
+        self.uniform.merge(&o.uniform);
+    }
 }
 
 impl DepthStats {
@@ -101,6 +129,10 @@ impl DepthStats {
         }
         w.u64(self.bootstrap_nonzero).u64(u64::from(self.independent)).f64(self.large_step_estimate);
         w.u64(self.hybrid_samples);
+        w.f64(self.bridge.level);
+        for m in [&self.bridge.states, &self.bridge.uniform] {
+            w.f64(m.sum).f64(m.sum2).u64(m.n);
+        }
     }
 
     /// Statistics [`Self::encode`] wrote.
@@ -150,6 +182,10 @@ impl DepthStats {
         d.independent = r.u64() != 0;
         d.large_step_estimate = r.f64();
         d.hybrid_samples = r.u64();
+        d.bridge.level = r.f64();
+        for m in [&mut d.bridge.states, &mut d.bridge.uniform] {
+            *m = Moments { sum: r.f64(), sum2: r.f64(), n: r.u64() };
+        }
         d
     }
 
@@ -164,6 +200,7 @@ impl DepthStats {
         self.seconds += o.seconds;
         self.independent |= o.independent;
         self.hybrid_samples += o.hybrid_samples;
+        self.bridge.merge(&o.bridge);
         if let Some(o) = &o.swaps {
             self.swaps.get_or_insert_with(|| SwapStats::new(o.replicas)).merge(o);
         }

@@ -100,6 +100,9 @@ pub struct GroupContext<'a> {
     /// The level of the independent samples the group's chains are combined with
     /// ([`super::hybrid`]; 0: none).
     pub mis_level: f32,
+    /// The level of the bridge estimate of the group's normalisation its chains add to
+    /// ([`super::bridge`]; 0: none).
+    pub bridge_level: f32,
 }
 
 impl GroupContext<'_> {
@@ -111,6 +114,7 @@ impl GroupContext<'_> {
         let mut chain =
             Chain::start_clamped(target, sampler_for(self.seed, self.k, index, self.settings), rng, self.k, self.clamp);
         chain.set_mis_level(self.mis_level);
+        chain.set_bridge_level(self.bridge_level);
         chain
     }
 }
