@@ -51,7 +51,8 @@ pub struct IntegratorFlags {
     /// MMLT and tempered MMLT: R samples of bidirectional path tracing per main-chain
     /// mutation, combined with the chains by multiple importance sampling: the samples carry
     /// the dim parts of the image, the chains the bright, hard-to-find paths (default 0: the
-    /// chains alone); `auto`: the split and the weights a short pilot measures
+    /// chains alone); `auto`: a short pilot chooses BDPT alone, the chains alone or their
+    /// combination, and its split and weights
     #[arg(long, value_name = "R|auto")]
     pub hybrid: Option<tempera::integrator::Hybrid>,
     /// MMLT and tempered MMLT with --hybrid: what a main-chain mutation counts as, in

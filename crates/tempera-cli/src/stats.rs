@@ -13,7 +13,21 @@ pub fn write(path: &Path, stats: &RunStats) -> Result<()> {
 
 /// A per-depth table of chain statistics on standard error.
 pub fn print_table(stats: &RunStats) {
-    if stats.depths.is_empty() {
+    if let Some(c) = stats.depths.first().and_then(|d| d.hybrid_pilot) {
+        let chose = if c.bdpt_alone() {
+            "BDPT alone".to_owned()
+        } else if c.chains_alone() {
+            "the chains alone".to_owned()
+        } else {
+            format!("the samples {:.0} % of the work", 100.0 * c.work_share)
+        };
+        eprintln!(
+            "pilot ({:.1} s): BDPT's relative variance per unit of work {:.3} times the chains': {chose}",
+            c.seconds, c.variance_ratio
+        );
+    }
+    // No chains ran (BDPT alone by the pilot's choice): nothing to tabulate.
+    if stats.depths.iter().all(|d| d.mutations == 0) {
         return;
     }
     let tempered = stats.depths.iter().any(|d| d.swaps.is_some());

@@ -5,12 +5,17 @@
 //!
 //! With `V_b` and `V_m` those variances (relMSE's terms, `ε = 0.01`, against the median of the
 //! four images smoothed over 3×3 pixels, so that a firefly does not sit in its own
-//! denominator) and `ρ = V_b/V_m`, the samples get the share `s = 1/(1 + ρ⁴)` of the work,
-//! clamped to `[0.05, 0.9]`: nearly all of it where BDPT is clearly the better method, little
-//! where the chains are, a share between where neither is far ahead. A linear model of the
-//! two estimators' precisions would put all of the work on the better one; the exponent,
-//! chosen by the README's screens, leaves the combination room where both are close. The
-//! weights are variance-aware (Grittmann et al. 2019, "Variance-aware multiple importance
+//! denominator) and `ρ = V_b/V_m`, the render is BDPT alone where `ρ < 0.7`, the chains alone
+//! (the integrator's own setup, replica reuse included) where `ρ > 1.5`, and between them a
+//! combination in which the samples get the share `s = 1/(1 + ρ⁴)` of the work, clamped to
+//! `[0.05, 0.9]`. A combination whose chains get a tenth of the work or less was measured
+//! worse than BDPT alone on every scene where the pilot chose it (few mutations per chain mix
+//! poorly, and the weights take them for better than they are), and one whose samples get a
+//! twentieth worse than the chains alone; the thresholds are the README's. Under a fixed
+//! budget BDPT alone draws as many samples per pixel as the pilot measured it to make in the
+//! rays of the budget's mutations. A linear model of the two estimators' precisions would put
+//! all of the work on the better one; the exponent, chosen by the README's screens, leaves the
+//! combination room where both are close. The weights are variance-aware (Grittmann et al. 2019, "Variance-aware multiple importance
 //! sampling"): each technique's count in the balance heuristic is divided by its variance
 //! per sample, so a main-chain mutation counts as `e = ρ·r_b/r_m` independent samples (`r_b`,
 //! `r_m` the samples and mutations made per unit of work). Any split and any weights keep the
@@ -40,18 +45,25 @@ const CHAIN_TIME: (f64, f64, f64) = (0.04, 1.0, 0.2);
 const BDPT_TIME: (f64, f64, f64) = (0.01, 0.25, 0.05);
 /// The share of a fixed budget's mutations each pilot render of the chains makes.
 const SAMPLE_SHARE: f64 = 0.02;
-/// The bounds of the samples' share of the work.
+/// The bounds of the samples' share of the work in a combination.
 const SHARE_RANGE: (f64, f64) = (0.05, 0.9);
+/// Below this variance ratio BDPT renders alone; above the second, the chains.
+const ALONE: (f64, f64) = (0.7, 1.5);
 
 /// What the pilot chose (`--stats` writes it in depth 0's row as `hybrid_pilot`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HybridChoice {
     /// BDPT's relative variance per unit of work over the chains' (`ρ`).
     pub variance_ratio: f64,
-    /// The samples' share of the work (`s`).
+    /// The samples' share of the work (`s`): 1 where BDPT renders alone, 0 where the chains do.
     pub work_share: f64,
-    /// BDPT samples per main-chain mutation that give the samples that share of the work.
+    /// BDPT samples per main-chain mutation that give the samples that share of the work in a
+    /// combination (0 where one method renders alone).
     pub ratio: f64,
+    /// BDPT samples per main-chain mutation made in the same work: under a fixed budget, BDPT
+    /// alone draws this many samples per pixel for each mutation per pixel of the budget.
+    #[serde(default)]
+    pub samples_per_mutation: f64,
     /// What a main-chain mutation counts as in the combination's weights: BDPT's variance per
     /// sample over the chains' per mutation (`ρ` times BDPT's samples over the chains'
     /// mutations per unit of work), the variance-aware weights of Grittmann et al. 2019.
@@ -66,16 +78,34 @@ impl HybridChoice {
     pub fn from_ratio(variance_ratio: f64, rates: (f64, f64), seconds: f64) -> Self {
         let rho =
             if variance_ratio.is_finite() && variance_ratio > 0.0 { variance_ratio.clamp(1e-3, 1e3) } else { 1.0 };
-        let s = (1.0 / (1.0 + rho.powi(4))).clamp(SHARE_RANGE.0, SHARE_RANGE.1);
         let (samples, mutations) = rates;
         let per = if samples > 0.0 && mutations > 0.0 { samples / mutations } else { 0.1 };
+        let (work_share, ratio) = if rho < ALONE.0 {
+            (1.0, 0.0)
+        } else if rho > ALONE.1 {
+            (0.0, 0.0)
+        } else {
+            let s = (1.0 / (1.0 + rho.powi(4))).clamp(SHARE_RANGE.0, SHARE_RANGE.1);
+            (s, (s / (1.0 - s) * per).clamp(1e-4, 100.0))
+        };
         Self {
             variance_ratio: rho,
-            work_share: s,
-            ratio: (s / (1.0 - s) * per).clamp(1e-4, 100.0),
+            work_share,
+            ratio,
+            samples_per_mutation: per,
             efficiency: (rho * per).clamp(1e-4, 100.0),
             seconds,
         }
+    }
+
+    /// Whether BDPT renders alone.
+    pub fn bdpt_alone(&self) -> bool {
+        self.work_share >= 1.0
+    }
+
+    /// Whether the chains render alone (with the integrator's own setup).
+    pub fn chains_alone(&self) -> bool {
+        self.work_share <= 0.0
     }
 }
 
@@ -227,7 +257,22 @@ pub fn render(
     let (choice, rest) = choose(chains, max_depth, scene, settings, control)?;
     let pilot = Duration::from_secs_f64(choice.seconds);
     let snapshots: Vec<Duration> = control.snapshots.iter().map(|t| t.saturating_sub(pilot)).collect();
-    let mut out = main(&choice, &rest, &RenderControl { snapshots: &snapshots, ..*control })?;
+    let control = RenderControl { snapshots: &snapshots, ..*control };
+    let mut out = if choice.bdpt_alone() {
+        let budget = match rest.budget {
+            // The samples the budget's mutations would have cost in rays.
+            Budget::Samples(mpp) => {
+                Budget::Samples(((f64::from(mpp) * choice.samples_per_mutation).round() as u32).max(1))
+            }
+            time => time,
+        };
+        let mut out = BdptIntegrator::new(max_depth).render(scene, &RenderSettings { budget, ..rest }, &control)?;
+        // BDPT has no chains: the choice gets a row of its own.
+        out.chains = vec![crate::mcmc::DepthStats::default()];
+        out
+    } else {
+        main(&choice, &rest, &control)?
+    };
     out.stats.seconds += choice.seconds;
     if let Some(first) = out.chains.first_mut() {
         first.hybrid_choice = Some(choice);
@@ -239,20 +284,27 @@ pub fn render(
 mod tests {
     use super::*;
 
-    /// BDPT far worse: little work and weight for the samples; far better: most of both; the
-    /// count ratio converts the split with the rates.
+    /// BDPT worse: little work and weight for the samples; better: most of both; the count ratio
+    /// converts the split with the rates; far apart, one method renders alone.
     #[test]
     fn the_split_follows_the_variance_ratio() {
-        let worse = HybridChoice::from_ratio(3.0, (1.0, 10.0), 0.0);
+        let worse = HybridChoice::from_ratio(1.4, (1.0, 10.0), 0.0);
         let even = HybridChoice::from_ratio(1.0, (1.0, 10.0), 0.0);
-        let better = HybridChoice::from_ratio(0.2, (1.0, 10.0), 0.0);
-        assert_eq!(worse.work_share, 0.05);
+        let better = HybridChoice::from_ratio(0.75, (1.0, 10.0), 0.0);
+        assert!((worse.work_share - 1.0 / (1.0 + 1.4f64.powi(4))).abs() < 1e-12);
         assert!((even.work_share - 0.5).abs() < 1e-12);
-        assert_eq!(better.work_share, 0.9);
+        assert!(better.work_share > 0.75 && better.work_share < 0.9, "{}", better.work_share);
         // A mutation counts as ρ times the samples per mutation made per unit of work.
-        assert!((worse.efficiency - 0.3).abs() < 1e-12 && (better.efficiency - 0.02).abs() < 1e-12);
+        assert!((worse.efficiency - 0.14).abs() < 1e-12 && (better.efficiency - 0.075).abs() < 1e-12);
         assert!((even.ratio - 0.1).abs() < 1e-12, "{}", even.ratio);
         // No measurement: an even split.
         assert_eq!(HybridChoice::from_ratio(f64::NAN, (1.0, 10.0), 0.0).work_share, 0.5);
+        // Far apart: one method alone, and no samples beside the chains.
+        let chains = HybridChoice::from_ratio(3.0, (1.0, 10.0), 0.0);
+        let bdpt = HybridChoice::from_ratio(0.2, (1.0, 10.0), 0.0);
+        assert!(chains.chains_alone() && !chains.bdpt_alone() && chains.ratio == 0.0);
+        assert!(bdpt.bdpt_alone() && !bdpt.chains_alone() && bdpt.ratio == 0.0);
+        assert!(!even.bdpt_alone() && !even.chains_alone());
+        assert_eq!(bdpt.samples_per_mutation, 0.1);
     }
 }

@@ -44,9 +44,9 @@ pub struct MmltIntegrator {
     /// Instead of [`Self::chain_efficiency`], weights that give the BDPT samples this share of
     /// each depth's light ([`crate::mcmc::hybrid::HybridDepth::with_share`]).
     pub sample_share: Option<f64>,
-    /// Choose [`Self::hybrid`] and [`Self::chain_efficiency`] by a pilot
-    /// ([`crate::integrator::hybrid_pilot`]); a [`Self::sample_share`] given still sets the
-    /// weights.
+    /// Choose by a pilot ([`crate::integrator::hybrid_pilot`]) between BDPT alone, the chains
+    /// alone and their combination, and for a combination [`Self::hybrid`] and
+    /// [`Self::chain_efficiency`]; a [`Self::sample_share`] given still sets its weights.
     pub hybrid_auto: bool,
     /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
     /// ([`crate::mcmc::efficiency`]).

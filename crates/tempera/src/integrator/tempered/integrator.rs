@@ -79,9 +79,9 @@ pub struct TemperedIntegrator {
     /// Instead of [`Self::chain_efficiency`], weights that give the BDPT samples this share of
     /// each depth's light ([`crate::mcmc::hybrid::HybridDepth::with_share`]).
     pub sample_share: Option<f64>,
-    /// Choose [`Self::hybrid`] and [`Self::chain_efficiency`] by a pilot
-    /// ([`crate::integrator::hybrid_pilot`]); a [`Self::sample_share`] given still sets the
-    /// weights.
+    /// Choose by a pilot ([`crate::integrator::hybrid_pilot`]) between BDPT alone, the chains
+    /// alone and their combination, and for a combination [`Self::hybrid`] and
+    /// [`Self::chain_efficiency`]; a [`Self::sample_share`] given still sets its weights.
     pub hybrid_auto: bool,
     /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
     /// ([`crate::mcmc::efficiency`]).
@@ -263,7 +263,12 @@ impl Integrator for TemperedIntegrator {
                 settings,
                 control,
                 |c, s, cx| {
-                    Self { hybrid: c.ratio, chain_efficiency: c.efficiency, ..chains.clone() }.render(scene, s, cx)
+                    if c.chains_alone() {
+                        // The chains alone, with replica reuse as the integrator has it.
+                        Self { hybrid_auto: false, hybrid: 0.0, ..self.clone() }.render(scene, s, cx)
+                    } else {
+                        Self { hybrid: c.ratio, chain_efficiency: c.efficiency, ..chains.clone() }.render(scene, s, cx)
+                    }
                 },
             );
         }
