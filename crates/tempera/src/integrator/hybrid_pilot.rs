@@ -15,11 +15,12 @@
 //! budget BDPT alone draws as many samples per pixel as the pilot measured it to make in the
 //! rays of the budget's mutations. A linear model of the two estimators' precisions would put
 //! all of the work on the better one; the exponent, chosen by the README's screens, leaves the
-//! combination room where both are close. The weights are variance-aware (Grittmann et al. 2019, "Variance-aware multiple importance
-//! sampling"): each technique's count in the balance heuristic is divided by its variance
-//! per sample, so a main-chain mutation counts as `e = ρ·r_b/r_m` independent samples (`r_b`,
-//! `r_m` the samples and mutations made per unit of work). Any split and any weights keep the
-//! combination unbiased; the pilot's images are not part of the render's.
+//! combination room where both are close. The weights are variance-aware (Grittmann et al.
+//! 2019, "Variance-aware multiple importance sampling"): each technique's count in the balance
+//! heuristic is divided by its variance per sample, so a main-chain mutation counts as
+//! `e = ρ·r_b/r_m` independent samples (`r_b`, `r_m` the samples and mutations made per unit of
+//! work). Any split and any weights keep the combination unbiased; the pilot's images are not
+//! part of the render's.
 //!
 //! A time budget gives each pilot render of the chains 4 % of it, at least 1 s (a chain's
 //! error falls faster than one over the time at first, so a shorter pilot misjudges it), and
