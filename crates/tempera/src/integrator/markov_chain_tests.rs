@@ -247,3 +247,39 @@ fn bidirectional_and_markov_chain_integrators_agree_through_a_thin_lens() {
         assert!((mm - mp).abs() < 4.0 * sp + 0.05 * mp, "block {i}: mmlt {mm} vs path {mp} ± {sp}");
     }
 }
+
+/// On a Cornell box, where the chains reach their targets quickly, the bridge estimate of each
+/// depth's normalisation from the chains' states agrees with `b` within their errors, for MMLT
+/// and for tempered MMLT's replica 0 after a burn-in (whose statistics are discarded).
+#[test]
+fn the_bridge_estimate_agrees_with_b_where_the_chains_mix() {
+    let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl::new(&cancel, &|_| {});
+    let settings = RenderSettings { budget: Budget::Samples(256), seed: 3, threads: 0 };
+    let mmlt = MmltIntegrator { bootstrap: 20_000, ..MmltIntegrator::new(4) };
+    let tempered = TemperedIntegrator {
+        bootstrap: 20_000,
+        tuning: LadderTuning::BurnIn,
+        burn_in: 50,
+        ..TemperedIntegrator::new(4)
+    };
+    for out in
+        [mmlt.render(&scene, &settings, &control).unwrap(), tempered.render(&scene, &settings, &control).unwrap()]
+    {
+        let mut compared = 0;
+        for d in out.chains.iter().filter(|d| d.depth >= 1 && d.b > 0.0) {
+            assert!(d.b_bridge > 0.0, "depth {}: no bridge estimate", d.depth);
+            let sigma = (d.b_rel_se.powi(2) + d.b_bridge_rel_se.powi(2)).sqrt();
+            assert!(
+                (d.b_bridge / d.b - 1.0).abs() < 4.0 * sigma + 0.01,
+                "depth {}: {} vs {} ± {sigma}",
+                d.depth,
+                d.b_bridge,
+                d.b
+            );
+            compared += 1;
+        }
+        assert!(compared >= 3, "{:?}", out.chains);
+    }
+}

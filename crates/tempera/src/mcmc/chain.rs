@@ -111,9 +111,8 @@ pub struct Chain<S> {
     /// value `f` splats with the balance-heuristic weight `f/(f + h)`, that is `C/(f + h)`
     /// instead of `C/f`. 0: the chain alone.
     mis_level: f32,
-    /// The level of the bridge estimate of the target's normalisation ([`super::bridge`]) the
-    /// chain adds its states and large steps to (0: none).
-    bridge_level: f32,
+    /// The chain's statistics, with the bridge sums ([`super::bridge`]) and their level
+    /// (`stats.bridge.level`; 0: the chain adds nothing to them).
     pub stats: DepthStats,
     /// The large-step proposals' values.
     pub large: Moments,
@@ -152,7 +151,6 @@ impl<S: State> Chain<S> {
             proposal: S::default(),
             clamp,
             mis_level: 0.0,
-            bridge_level: 0.0,
             stats: DepthStats { depth, ..DepthStats::default() },
             large: Moments::default(),
         }
@@ -172,18 +170,18 @@ impl<S: State> Chain<S> {
     /// large-step probability, level of independent samples and bridge level (and `fresh`'s
     /// clamp).
     pub fn restart(&mut self, fresh: Chain<S>) {
-        let (rays, p, h, bridge) = (self.cx.rays, self.large_step_probability(), self.mis_level, self.bridge_level);
+        let (rays, p, h, bridge) =
+            (self.cx.rays, self.large_step_probability(), self.mis_level, self.stats.bridge.level);
         *self = fresh;
         self.cx.rays += rays;
         self.set_large_step_probability(p);
         self.mis_level = h;
-        self.set_bridge_level(bridge);
+        self.stats.bridge.level = bridge;
     }
 
     /// Adds this chain's states and large steps to the bridge estimate of its target's
     /// normalisation at level `h` ([`super::bridge`]; 0: not).
     pub fn set_bridge_level(&mut self, h: f32) {
-        self.bridge_level = h;
         self.stats.bridge.level = f64::from(h);
     }
 
@@ -314,9 +312,9 @@ impl<S: State> Chain<S> {
         }
         let (pv, cv) = (self.proposal.value(), self.current.value());
         let a = if cv > 0.0 { (pv / cv).min(1.0) } else { 1.0 };
-        let h = self.bridge_level;
+        let h = s.bridge.level;
         if h > 0.0 {
-            let (pv, cv, h, a) = (f64::from(pv), f64::from(cv), f64::from(h), f64::from(a));
+            let (pv, cv, a) = (f64::from(pv), f64::from(cv), f64::from(a));
             s.bridge.states.push(a / (pv + h) + (1.0 - a) / (cv + h));
             if large {
                 s.bridge.uniform.push(pv / (pv + h));

@@ -167,7 +167,10 @@ pub(super) fn develop<L: Layers>(
             prior.mean_and_rel_se()
         };
         (d.b, d.b_rel_se) = boot.normalisation(&large[k][0]);
+        // A mixture chain's states follow the mixture of targets, not the group's own.
+        let mixture = groups[k].as_ref().is_some_and(|g| g.shared.mixture());
         if !d.independent
+            && !mixture
             && let Some((b, rel)) = super::bridge::estimate(&boot.values, &bridges[k])
         {
             (d.b_bridge, d.b_bridge_rel_se) = (b, rel);

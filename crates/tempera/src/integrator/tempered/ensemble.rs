@@ -22,6 +22,7 @@ use crate::film::SharedSplats;
 use crate::integrator::ReplicaSplats;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
+use crate::mcmc::stats::BridgeSums;
 use crate::mcmc::{
     Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, Target, TemperedState, TemperedTarget, Walker,
     target_value,
@@ -191,7 +192,9 @@ impl<'a> Ensemble<'a> {
     /// Burn-in statistics are discarded with its splats.
     fn discard_statistics(&mut self) {
         for chain in &mut self.replicas.chains {
-            chain.stats = DepthStats { depth: chain.stats.depth, ..DepthStats::default() };
+            // The bridge sums start afresh at the chain's level.
+            let bridge = BridgeSums { level: chain.stats.bridge.level, ..BridgeSums::default() };
+            chain.stats = DepthStats { depth: chain.stats.depth, bridge, ..DepthStats::default() };
             chain.large = Moments::default();
         }
         self.swaps = SwapStats::new(self.replicas.len());

@@ -222,7 +222,13 @@ impl TemperedIntegrator {
             let target = TemperedTarget::flattened(scene, k, self.tempering(), a, self.flattening);
             let rng =
                 if j == 0 { cx.rng.clone() } else { Pcg32::new(hash(&[seed, 0x7e4b, k as u64, c as u64]), j as u64) };
-            replicas.chains.push(cx.start_chain(&target, rng));
+            let mut chain = cx.start_chain(&target, rng);
+            if j > 0 {
+                // Only replica 0's statistics are reported: the hotter ones add nothing to the
+                // bridge estimate of b.
+                chain.set_bridge_level(0.0);
+            }
+            replicas.chains.push(chain);
             replicas.targets.push(target);
         }
         let rng = Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11);
