@@ -101,6 +101,10 @@ pub struct DepthRecord {
     pub b_bridge: f64,
     #[serde(default, skip_serializing_if = "is_zero")]
     pub b_bridge_rel_se: f64,
+    /// Tempered MMLT with all-replica reuse: `b` as the hottest replica's normalisation times
+    /// the bridge ratios down the ladder (absent where not estimated).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub b_ladder: f64,
     pub bootstrap_samples: u64,
     pub large_step_samples: u64,
     /// Non-zero values among the bootstrap samples.
@@ -222,6 +226,7 @@ impl DepthRecord {
             b_rel_se: d.b_rel_se,
             b_bridge: d.b_bridge,
             b_bridge_rel_se: d.b_bridge_rel_se,
+            b_ladder: d.b_ladder,
             bootstrap_samples: d.bootstrap_samples,
             large_step_samples: d.large_step_samples,
             bootstrap_nonzero: d.bootstrap_nonzero,

@@ -212,6 +212,10 @@ pub(super) fn develop<L: Layers>(
                 (_, None) => continue,
             };
             layer_b.push(b);
+            if l + 1 == group.shared.valued() && l > 0 && !group.shared.mixture() {
+                // The hottest replica's b times the bridge ratios down the ladder.
+                d.b_ladder = d.ladder_bridge.iter().try_fold(b, |acc, p| p.ratio().map(|r| acc * r)).unwrap_or(0.0);
+            }
             let scale = if d.independent {
                 pixels as f64 / independent_samples as f64
             } else {

@@ -23,6 +23,7 @@ pub mod tempered;
 pub mod walker;
 
 pub use bootstrap::{Bootstrap, sampler_for, shared_bootstrap_bytes};
+pub use bridge::LadderBridge;
 pub use chain::{Chain, EvalContext, GroupValue, State, Target, target_value};
 pub use driver::ChainSettings;
 pub use full::{FullContribution, evaluate_full};

@@ -1,5 +1,6 @@
 //! Per-depth chain statistics, counted per chain and merged once (DESIGN §6.7).
 
+use super::bridge::LadderBridge;
 use crate::cluster::{Reader, Wire};
 
 /// What the chains of one path depth did.
@@ -71,6 +72,13 @@ pub struct DepthStats {
     /// developed.
     pub b_bridge: f64,
     pub b_bridge_rel_se: f64,
+    /// Tempered MMLT with all-replica reuse: per neighbouring pair of replicas `(j, j + 1)`,
+    /// the sums of the bridge estimate of `b_j/b_{j+1}` over the replicas' states
+    /// ([`LadderBridge`]).
+    pub ladder_bridge: Vec<LadderBridge>,
+    /// `b` as the ladder gives it, the hottest replica's normalisation times the bridge ratios
+    /// down the ladder (0: not estimated). Set when the image is developed.
+    pub b_ladder: f64,
 }
 
 /// What a chain adds to the bridge estimate of its target's normalisation ([`super::bridge`])
@@ -133,6 +141,10 @@ impl DepthStats {
         for m in [&self.bridge.states, &self.bridge.uniform] {
             w.f64(m.sum).f64(m.sum2).u64(m.n);
         }
+        w.u64(self.ladder_bridge.len() as u64);
+        for &x in self.ladder_bridge.iter().flat_map(|p| p.upper.iter().chain(&p.lower)) {
+            w.f64(x);
+        }
     }
 
     /// Statistics [`Self::encode`] wrote.
@@ -186,6 +198,10 @@ impl DepthStats {
         for m in [&mut d.bridge.states, &mut d.bridge.uniform] {
             *m = Moments { sum: r.f64(), sum2: r.f64(), n: r.u64() };
         }
+        d.ladder_bridge = vec![LadderBridge::default(); r.u64() as usize];
+        for x in d.ladder_bridge.iter_mut().flat_map(|p| p.upper.iter_mut().chain(&mut p.lower)) {
+            *x = r.f64();
+        }
         d
     }
 
@@ -201,6 +217,12 @@ impl DepthStats {
         self.independent |= o.independent;
         self.hybrid_samples += o.hybrid_samples;
         self.bridge.merge(&o.bridge);
+        if self.ladder_bridge.len() < o.ladder_bridge.len() {
+            self.ladder_bridge.resize(o.ladder_bridge.len(), LadderBridge::default());
+        }
+        for (a, b) in self.ladder_bridge.iter_mut().zip(&o.ladder_bridge) {
+            a.merge(b);
+        }
         if let Some(o) = &o.swaps {
             self.swaps.get_or_insert_with(|| SwapStats::new(o.replicas)).merge(o);
         }

@@ -24,8 +24,8 @@ use crate::math::distribution::Distribution1D;
 use crate::math::rng::Pcg32;
 use crate::mcmc::stats::BridgeSums;
 use crate::mcmc::{
-    Chain, DepthStats, GroupContext, Layers, Moments, State, SwapStats, Target, TemperedState, TemperedTarget, Walker,
-    target_value,
+    Chain, DepthStats, GroupContext, LadderBridge, Layers, Moments, State, SwapStats, Target, TemperedState,
+    TemperedTarget, Walker, target_value,
 };
 use rayon::prelude::*;
 
@@ -78,6 +78,8 @@ pub struct Ensemble<'a> {
     large: Vec<Moments>,
     /// Sweeps made since the render began.
     sweeps: u64,
+    /// With reuse, the bridge sums of each neighbouring pair's ratio `b_j/b_{j+1}`.
+    ladder_bridge: Vec<LadderBridge>,
 }
 
 /// What the ensembles of a depth share once prepared: with all-replica reuse, the ratios the
@@ -129,6 +131,7 @@ impl<'a> Ensemble<'a> {
             cross: Vec::new(),
             large: vec![Moments::default(); k],
             sweeps: 0,
+            ladder_bridge: vec![LadderBridge::default(); k.saturating_sub(1)],
         }
     }
 
@@ -199,6 +202,7 @@ impl<'a> Ensemble<'a> {
         }
         self.swaps = SwapStats::new(self.replicas.len());
         self.large = vec![Moments::default(); self.replicas.len()];
+        self.ladder_bridge = vec![LadderBridge::default(); self.replicas.len().saturating_sub(1)];
     }
 
     /// One sweep: a mutation per replica, each large-step proposal valued under the first
@@ -212,6 +216,7 @@ impl<'a> Ensemble<'a> {
         let Replicas { chains, targets } = &mut self.replicas;
         let targets: &[TemperedTarget] = targets;
         let large = &mut self.large;
+        let bridge = &mut self.ladder_bridge;
         let valued = if reuse.is_some() { targets.len() } else { 1 };
         let hot = self.sweeps.is_multiple_of(self.settings.hot_every);
         for (j, (chain, target)) in chains.iter_mut().zip(targets).enumerate() {
@@ -220,6 +225,7 @@ impl<'a> Ensemble<'a> {
                 // sweep's sample of its target.
                 if let Some(reuse) = expected {
                     splat_reused(reuse, targets, chain.state_mut(), j, 1.0, &splats[j]);
+                    bridge_state(bridge, reuse, targets, chain.state_mut(), j, 1.0);
                 }
                 continue;
             }
@@ -232,10 +238,38 @@ impl<'a> Ensemble<'a> {
             match expected {
                 Some(reuse) => chain.mutate_splatting(target, observe, |state, weight| {
                     splat_reused(reuse, targets, state, j, weight, &splats[j]);
+                    bridge_state(bridge, reuse, targets, state, j, weight);
                 }),
                 None => chain.mutate_observed(target, (j == 0 && reuse.is_none()).then(|| &splats[0]), observe),
             }
         }
+    }
+}
+
+/// Adds `state`, a state of replica `j` weighted `weight` as it splats, to the bridge sums of
+/// the pairs `(j − 1, j)` and `(j, j + 1)`, each at the level `ρ_j/ρ_{j+1}` of the reuse's
+/// ratios (its calibrated `b_j/b_{j+1}`). Needs no evaluation the splat has not made.
+fn bridge_state(
+    bridge: &mut [LadderBridge],
+    reuse: &Reuse,
+    targets: &[TemperedTarget],
+    state: &mut TemperedState,
+    j: usize,
+    weight: f32,
+) {
+    if weight <= 0.0 {
+        return;
+    }
+    state.note_own_value(j, targets.len());
+    let mut f = |l: usize| f64::from(target_value(state.value_under(l, targets)));
+    let level = |p: usize| reuse.ratios[p] / reuse.ratios[p + 1];
+    if j >= 1 {
+        let values = (f(j - 1), f(j));
+        bridge[j - 1].add(true, values, f64::from(weight), level(j - 1));
+    }
+    if j + 1 < targets.len() {
+        let values = (f(j), f(j + 1));
+        bridge[j].add(false, values, f64::from(weight), level(j));
     }
 }
 
@@ -312,6 +346,7 @@ impl Walker for Ensemble<'_> {
         let mut stats = self.replicas.chains[0].stats.clone();
         stats.ladder = self.replicas.ladder();
         stats.ladder_ensembles = 1;
+        stats.ladder_bridge = self.ladder_bridge.clone();
         // A mixture chain does not swap.
         stats.swaps = (self.replicas.len() > 1 && self.settings.mixture.is_none()).then(|| self.swaps.clone());
         stats
