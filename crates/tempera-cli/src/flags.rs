@@ -69,6 +69,10 @@ pub struct IntegratorFlags {
     /// `measured_efficiency`; the depths' splat buffers take twice the memory)
     #[arg(long)]
     pub measure_efficiency: bool,
+    /// MMLT and tempered MMLT: scale each depth's share of the image by the bridge estimate of
+    /// its normalisation (`b_bridge` in --stats) instead of `b`, where there is one
+    #[arg(long)]
+    pub bridge_normalisation: bool,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long)]
     pub replicas: Option<usize>,
@@ -182,6 +186,7 @@ impl IntegratorFlags {
             chain_efficiency: self.chain_efficiency,
             hybrid_share: self.hybrid_share,
             measure_efficiency: self.measure_efficiency.then_some(true),
+            bridge_normalisation: self.bridge_normalisation.then_some(true),
             replicas: self.replicas,
             swap: self.swap,
             ladder: self.ladder.clone(),

@@ -3,7 +3,7 @@
 
 use super::tests::{assert_agree, block_stats, classify_furnace_pixels, render_with};
 use super::*;
-use crate::math::Rgb;
+use crate::math::{Rgb, luminance};
 use crate::scene::Scene;
 use std::sync::atomic::AtomicBool;
 
@@ -301,5 +301,49 @@ fn the_ladder_estimate_agrees_with_b_down_a_roughened_ladder() {
         assert!(d.b_ladder > 0.0, "depth {}: no ladder estimate", d.depth);
         // Seed 5 gives 0.1–0.9 % at depths 1–3; a ratio taken upside down is 5–75 % off.
         assert!((d.b_ladder / d.b - 1.0).abs() < 0.05, "depth {}: {} vs {}", d.depth, d.b_ladder, d.b);
+    }
+}
+
+/// `bridge_normalisation` scales each depth's share of the image by its bridge estimate: for
+/// MMLT each depth image is the plain render's times `b_bridge/b` (the chains and their
+/// splats are the same), and MMLT and tempered MMLT so normalised agree with BDPT on a Cornell
+/// box.
+#[test]
+fn bridge_normalisation_scales_each_depth_by_its_bridge_estimate_and_agrees_with_bdpt() {
+    let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl::new(&cancel, &|_| {});
+    let settings = RenderSettings { budget: Budget::Samples(1024), seed: 4, threads: 0 };
+    let plain = MmltIntegrator { bootstrap: 50_000, depth_images: true, ..MmltIntegrator::new(5) };
+    let bridged = MmltIntegrator { bridge_normalisation: true, ..plain };
+    let (a, b) =
+        (plain.render(&scene, &settings, &control).unwrap(), bridged.render(&scene, &settings, &control).unwrap());
+    let mut scaled = 0;
+    for (k, (pa, pb)) in a.layers.iter().zip(&b.layers).enumerate() {
+        let d = &a.chains[k];
+        let ratio = if d.b_bridge > 0.0 { d.b_bridge / d.b } else { 1.0 };
+        for (x, y) in pa.pixels.iter().zip(&pb.pixels) {
+            let (x, y) = (f64::from(luminance(*x)), f64::from(luminance(*y)));
+            assert!((y - x * ratio).abs() <= 1e-5 * (x * ratio).abs() + 1e-12, "depth {k}: {y} vs {x} × {ratio}");
+        }
+        scaled += usize::from(d.b_bridge > 0.0 && (ratio - 1.0).abs() > 1e-6);
+    }
+    assert!(scaled >= 3, "{:?}", a.chains);
+    let tempered = TemperedIntegrator { bootstrap: 50_000, bridge_normalisation: true, ..TemperedIntegrator::new(5) };
+    let t = tempered.render(&scene, &RenderSettings { budget: Budget::Samples(512), ..settings }, &control).unwrap();
+    let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
+    let reference = block_stats(&bdpt.image, 16);
+    let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
+    for (name, image) in [("mmlt", &b.image), ("tempered", &t.image)] {
+        let blocks = block_stats(image, 16);
+        assert!(
+            (mean(&blocks) / mean(&reference) - 1.0).abs() < 0.02,
+            "{name}: {} vs {}",
+            mean(&blocks),
+            mean(&reference)
+        );
+        for (i, ((m, _), (r, s))) in blocks.iter().zip(&reference).enumerate() {
+            assert!((m - r).abs() < 4.0 * s + 0.04 * r, "{name} block {i}: {m} vs {r} ± {s}");
+        }
     }
 }

@@ -51,6 +51,9 @@ pub struct MmltIntegrator {
     /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
+    /// Scale each depth's image by the bridge estimate of its normalisation instead of `b`
+    /// ([`crate::mcmc::bridge`]).
+    pub bridge_normalisation: bool,
 }
 
 impl MmltIntegrator {
@@ -71,6 +74,7 @@ impl MmltIntegrator {
             sample_share: None,
             hybrid_auto: false,
             measure_efficiency: false,
+            bridge_normalisation: false,
         }
     }
 }
@@ -151,7 +155,8 @@ impl Integrator for MmltIntegrator {
             .with_hybrid(self.hybrid)
             .with_chain_efficiency(self.chain_efficiency)
             .with_sample_share(self.sample_share)
-            .with_measured_efficiency(self.measure_efficiency);
+            .with_measured_efficiency(self.measure_efficiency)
+            .with_bridge_normalisation(self.bridge_normalisation);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.group.k;

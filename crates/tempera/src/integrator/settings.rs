@@ -232,6 +232,10 @@ pub struct IntegratorSettings {
     /// in independent samples) from two halves of its chains, for the statistics.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub measure_efficiency: Option<bool>,
+    /// MMLT and tempered MMLT: scale each depth's image (replica 0's layer) by the bridge
+    /// estimate of its normalisation (`b_bridge`) instead of `b`, where there is one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bridge_normalisation: Option<bool>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
@@ -351,6 +355,7 @@ impl IntegratorSettings {
             ("chain_efficiency", self.chain_efficiency.is_some(), kind == Mmlt || tempered),
             ("hybrid_share", self.hybrid_share.is_some(), kind == Mmlt || tempered),
             ("measure_efficiency", self.measure_efficiency.is_some(), kind == Mmlt || tempered),
+            ("bridge_normalisation", self.bridge_normalisation.is_some(), kind == Mmlt || tempered),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
@@ -519,6 +524,7 @@ pub fn create(
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
                 sample_share: s.hybrid_share.or(m.sample_share),
                 measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
+                bridge_normalisation: s.bridge_normalisation.unwrap_or(m.bridge_normalisation),
                 depth_images: s.depth_images,
                 ..m
             })
@@ -564,6 +570,7 @@ pub fn create(
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
                 sample_share: s.hybrid_share.or(m.sample_share),
                 measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
+                bridge_normalisation: s.bridge_normalisation.unwrap_or(m.bridge_normalisation),
                 depth_images: s.depth_images,
                 ..m
             })

@@ -128,7 +128,7 @@ pub(super) fn develop<L: Layers>(
     groups: &[Option<Group<L>>],
     (summed, hybrid): (Option<&[Vec<SharedSplats>]>, Option<IndependentImage>),
     (w, h): (u32, u32),
-    (group_images, kappa): (bool, f64),
+    (group_images, kappa, bridge_normalisation): (bool, f64, bool),
 ) -> RenderOutput {
     let pixels = u64::from(w) * u64::from(h);
     let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.shared.valued());
@@ -207,6 +207,7 @@ pub(super) fn develop<L: Layers>(
                     });
                     (d.b + hot.sum::<f64>(), 1.0)
                 }
+                (0, _) if bridge_normalisation && d.b_bridge > 0.0 => (d.b_bridge, 1.0),
                 (0, _) => (d.b, 1.0),
                 (_, Some((moments, ratio))) => (refine(moments, &large[k][l]).0, ratio),
                 (_, None) => continue,

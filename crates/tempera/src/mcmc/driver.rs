@@ -72,6 +72,9 @@ pub struct ChainSettings {
     /// Measure each group's chain efficiency: its walkers of odd index splat into buffers of
     /// their own ([`Group::odd`]; [`super::efficiency`]), developed with the others.
     pub measure_efficiency: bool,
+    /// Scale each group's main layer by the bridge estimate of its normalisation
+    /// ([`super::bridge`]) instead of `b`, where there is one.
+    pub bridge_normalisation: bool,
 }
 
 /// One walker's place in the render.
@@ -126,6 +129,7 @@ impl ChainSettings {
             chain_efficiency: super::hybrid::DEFAULT_EFFICIENCY,
             sample_share: None,
             measure_efficiency: false,
+            bridge_normalisation: false,
         }
     }
 
@@ -152,6 +156,12 @@ impl ChainSettings {
     /// ([`Self::measure_efficiency`]).
     pub fn with_measured_efficiency(self, on: bool) -> Self {
         Self { measure_efficiency: on, ..self }
+    }
+
+    /// These settings with each group's main layer scaled by its bridge estimate when `on` is
+    /// set ([`Self::bridge_normalisation`]).
+    pub fn with_bridge_normalisation(self, on: bool) -> Self {
+        Self { bridge_normalisation: on, ..self }
     }
 
     /// These settings with clampable targets clamped at `clamp` times the mean of their
@@ -424,7 +434,7 @@ impl ChainSettings {
                 &prepared,
                 (summed.as_deref(), independent_image),
                 (w, h),
-                (self.group_images, kappa),
+                (self.group_images, kappa, self.bridge_normalisation),
             );
             if let Some(first) = out.chains.first_mut() {
                 (first.setup_seconds, first.setup_rays) = setup;

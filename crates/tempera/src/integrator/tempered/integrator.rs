@@ -86,6 +86,9 @@ pub struct TemperedIntegrator {
     /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
+    /// Scale each depth's replica-0 layer by the bridge estimate of its normalisation instead
+    /// of `b` ([`crate::mcmc::bridge`]).
+    pub bridge_normalisation: bool,
     /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
     /// image.
     pub depth_images: bool,
@@ -133,6 +136,7 @@ impl TemperedIntegrator {
             sample_share: None,
             hybrid_auto: false,
             measure_efficiency: false,
+            bridge_normalisation: false,
             depth_images: false,
             independent_below: 0,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
@@ -293,7 +297,8 @@ impl Integrator for TemperedIntegrator {
             .with_hybrid(self.hybrid)
             .with_chain_efficiency(self.chain_efficiency)
             .with_sample_share(self.sample_share)
-            .with_measured_efficiency(self.measure_efficiency);
+            .with_measured_efficiency(self.measure_efficiency)
+            .with_bridge_normalisation(self.bridge_normalisation);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
