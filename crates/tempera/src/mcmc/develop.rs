@@ -119,7 +119,8 @@ pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) 
 /// independent samples combined with the chains (`hybrid`: their depths and one buffer per
 /// depth, summed over the ranks) add their share ([`super::hybrid`]). Groups whose walkers
 /// splat in halves ([`Group::odd`]) get their chain efficiency measured, with the film's
-/// filter energy `kappa` ([`super::efficiency`]).
+/// filter energy `kappa` ([`super::efficiency`]). With `bridge_normalisation` each group's main
+/// layer is scaled by its bridge estimate ([`super::bridge`]) where it has one, instead of `b`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn develop<L: Layers>(
     boots: &[Bootstrap],
