@@ -88,15 +88,12 @@ impl LadderBridge {
     /// under the pair's targets and weight `w`, for the level `c`.
     pub fn add(&mut self, upper: bool, f: (f64, f64), w: f64, c: f64) {
         let d = f.0 + c * f.1;
-        if !(d > 0.0 && d.is_finite() && w > 0.0) {
-            // A state neither target sees adds its weight only.
-            let side = if upper { &mut self.upper } else { &mut self.lower };
-            side[1] += w.max(0.0);
-            return;
-        }
         let side = if upper { &mut self.upper } else { &mut self.lower };
-        side[0] += w * if upper { f.0 } else { f.1 } / d;
-        side[1] += w;
+        // A state neither target sees adds its weight only.
+        if d > 0.0 && d.is_finite() && w > 0.0 {
+            side[0] += w * if upper { f.0 } else { f.1 } / d;
+        }
+        side[1] += w.max(0.0);
     }
 
     /// The ratio `b_j/b_{j+1}` (`None` where either side saw nothing).
