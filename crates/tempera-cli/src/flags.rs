@@ -70,9 +70,10 @@ pub struct IntegratorFlags {
     #[arg(long)]
     pub measure_efficiency: bool,
     /// MMLT and tempered MMLT: scale each depth's share of the image by the bridge estimate of
-    /// its normalisation (`b_bridge` in --stats) instead of `b`, where there is one
-    #[arg(long)]
-    pub bridge_normalisation: bool,
+    /// its normalisation (`b_bridge` in --stats) instead of `b` where there is one and `b`'s
+    /// reported relative error (`b_rel_se`) exceeds E (0: wherever there is one)
+    #[arg(long, value_name = "E")]
+    pub bridge_above: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long)]
     pub replicas: Option<usize>,
@@ -186,7 +187,7 @@ impl IntegratorFlags {
             chain_efficiency: self.chain_efficiency,
             hybrid_share: self.hybrid_share,
             measure_efficiency: self.measure_efficiency.then_some(true),
-            bridge_normalisation: self.bridge_normalisation.then_some(true),
+            bridge_above: self.bridge_above,
             replicas: self.replicas,
             swap: self.swap,
             ladder: self.ladder.clone(),

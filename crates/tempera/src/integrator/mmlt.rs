@@ -51,9 +51,9 @@ pub struct MmltIntegrator {
     /// Measure each depth's chain efficiency from two halves of its chains, for the statistics
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
-    /// Scale each depth's image by the bridge estimate of its normalisation instead of `b`
-    /// ([`crate::mcmc::bridge`]).
-    pub bridge_normalisation: bool,
+    /// Scale each depth's image by the bridge estimate of its normalisation instead of `b` where
+    /// `b`'s reported relative error exceeds this ([`crate::mcmc::bridge`]; `None`: never).
+    pub bridge_above: Option<f64>,
 }
 
 impl MmltIntegrator {
@@ -74,7 +74,7 @@ impl MmltIntegrator {
             sample_share: None,
             hybrid_auto: false,
             measure_efficiency: false,
-            bridge_normalisation: false,
+            bridge_above: None,
         }
     }
 }
@@ -156,7 +156,7 @@ impl Integrator for MmltIntegrator {
             .with_chain_efficiency(self.chain_efficiency)
             .with_sample_share(self.sample_share)
             .with_measured_efficiency(self.measure_efficiency)
-            .with_bridge_normalisation(self.bridge_normalisation);
+            .with_bridge_above(self.bridge_above);
         let target = |depth| DepthTarget { scene, depth };
         chains.render(scene, settings, control, depths, target, |cx| {
             let k = cx.group.k;

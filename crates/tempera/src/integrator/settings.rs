@@ -233,9 +233,10 @@ pub struct IntegratorSettings {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub measure_efficiency: Option<bool>,
     /// MMLT and tempered MMLT: scale each depth's image (replica 0's layer) by the bridge
-    /// estimate of its normalisation (`b_bridge`) instead of `b`, where there is one.
+    /// estimate of its normalisation (`b_bridge`) instead of `b` where there is one and `b`'s
+    /// reported relative error (`b_rel_se`) exceeds this (0: wherever there is one).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub bridge_normalisation: Option<bool>,
+    pub bridge_above: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
@@ -355,7 +356,7 @@ impl IntegratorSettings {
             ("chain_efficiency", self.chain_efficiency.is_some(), kind == Mmlt || tempered),
             ("hybrid_share", self.hybrid_share.is_some(), kind == Mmlt || tempered),
             ("measure_efficiency", self.measure_efficiency.is_some(), kind == Mmlt || tempered),
-            ("bridge_normalisation", self.bridge_normalisation.is_some(), kind == Mmlt || tempered),
+            ("bridge_above", self.bridge_above.is_some(), kind == Mmlt || tempered),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
@@ -423,6 +424,7 @@ impl IntegratorSettings {
         check_probability("collapse_above", self.collapse_above)?;
         check_probability("collapse_below", self.collapse_below)?;
         check_range("normaliser_share", self.normaliser_share, 0.0..=1.0)?;
+        check_range("bridge_above", self.bridge_above, 0.0..=1e6)?;
         if self.hybrid.is_some_and(|r| !(0.0..=100.0).contains(&r.ratio())) {
             return Err("hybrid must be between 0 and 100 samples per mutation".into());
         }
@@ -524,7 +526,7 @@ pub fn create(
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
                 sample_share: s.hybrid_share.or(m.sample_share),
                 measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
-                bridge_normalisation: s.bridge_normalisation.unwrap_or(m.bridge_normalisation),
+                bridge_above: s.bridge_above.or(m.bridge_above),
                 depth_images: s.depth_images,
                 ..m
             })
@@ -570,7 +572,7 @@ pub fn create(
                 chain_efficiency: s.chain_efficiency.unwrap_or(m.chain_efficiency),
                 sample_share: s.hybrid_share.or(m.sample_share),
                 measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
-                bridge_normalisation: s.bridge_normalisation.unwrap_or(m.bridge_normalisation),
+                bridge_above: s.bridge_above.or(m.bridge_above),
                 depth_images: s.depth_images,
                 ..m
             })

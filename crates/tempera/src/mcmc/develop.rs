@@ -119,8 +119,9 @@ pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) 
 /// independent samples combined with the chains (`hybrid`: their depths and one buffer per
 /// depth, summed over the ranks) add their share ([`super::hybrid`]). Groups whose walkers
 /// splat in halves ([`Group::odd`]) get their chain efficiency measured, with the film's
-/// filter energy `kappa` ([`super::efficiency`]). With `bridge_normalisation` each group's main
-/// layer is scaled by its bridge estimate ([`super::bridge`]) where it has one, instead of `b`.
+/// filter energy `kappa` ([`super::efficiency`]). With `bridge_above` each group's main layer
+/// is scaled by its bridge estimate ([`super::bridge`]) instead of `b` where it has one and
+/// `b`'s reported relative error exceeds the threshold.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn develop<L: Layers>(
     boots: &[Bootstrap],
@@ -129,7 +130,7 @@ pub(super) fn develop<L: Layers>(
     groups: &[Option<Group<L>>],
     (summed, hybrid): (Option<&[Vec<SharedSplats>]>, Option<IndependentImage>),
     (w, h): (u32, u32),
-    (group_images, kappa, bridge_normalisation): (bool, f64, bool),
+    (group_images, kappa, bridge_above): (bool, f64, Option<f64>),
 ) -> RenderOutput {
     let pixels = u64::from(w) * u64::from(h);
     let layers = |k: usize| groups[k].as_ref().map_or(1, |g| g.shared.valued());
@@ -208,7 +209,7 @@ pub(super) fn develop<L: Layers>(
                     });
                     (d.b + hot.sum::<f64>(), 1.0)
                 }
-                (0, _) if bridge_normalisation && d.b_bridge > 0.0 => (d.b_bridge, 1.0),
+                (0, _) if d.b_bridge > 0.0 && bridge_above.is_some_and(|e| d.b_rel_se > e) => (d.b_bridge, 1.0),
                 (0, _) => (d.b, 1.0),
                 (_, Some((moments, ratio))) => (refine(moments, &large[k][l]).0, ratio),
                 (_, None) => continue,

@@ -73,8 +73,9 @@ pub struct ChainSettings {
     /// their own ([`Group::odd`]; [`super::efficiency`]), developed with the others.
     pub measure_efficiency: bool,
     /// Scale each group's main layer by the bridge estimate of its normalisation
-    /// ([`super::bridge`]) instead of `b`, where there is one.
-    pub bridge_normalisation: bool,
+    /// ([`super::bridge`]) instead of `b` where there is one and `b`'s reported relative error
+    /// exceeds this (`Some(0.0)`: wherever there is one; `None`: never).
+    pub bridge_above: Option<f64>,
 }
 
 /// One walker's place in the render.
@@ -129,7 +130,7 @@ impl ChainSettings {
             chain_efficiency: super::hybrid::DEFAULT_EFFICIENCY,
             sample_share: None,
             measure_efficiency: false,
-            bridge_normalisation: false,
+            bridge_above: None,
         }
     }
 
@@ -158,10 +159,10 @@ impl ChainSettings {
         Self { measure_efficiency: on, ..self }
     }
 
-    /// These settings with each group's main layer scaled by its bridge estimate when `on` is
-    /// set ([`Self::bridge_normalisation`]).
-    pub fn with_bridge_normalisation(self, on: bool) -> Self {
-        Self { bridge_normalisation: on, ..self }
+    /// These settings with each group's main layer scaled by its bridge estimate where `b`'s
+    /// relative error exceeds `above` ([`Self::bridge_above`]).
+    pub fn with_bridge_above(self, above: Option<f64>) -> Self {
+        Self { bridge_above: above, ..self }
     }
 
     /// These settings with clampable targets clamped at `clamp` times the mean of their
@@ -434,7 +435,7 @@ impl ChainSettings {
                 &prepared,
                 (summed.as_deref(), independent_image),
                 (w, h),
-                (self.group_images, kappa, self.bridge_normalisation),
+                (self.group_images, kappa, self.bridge_above),
             );
             if let Some(first) = out.chains.first_mut() {
                 (first.setup_seconds, first.setup_rays) = setup;

@@ -87,8 +87,9 @@ pub struct TemperedIntegrator {
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
     /// Scale each depth's replica-0 layer by the bridge estimate of its normalisation instead
-    /// of `b` ([`crate::mcmc::bridge`]).
-    pub bridge_normalisation: bool,
+    /// of `b` where `b`'s reported relative error exceeds this ([`crate::mcmc::bridge`];
+    /// `None`: never).
+    pub bridge_above: Option<f64>,
     /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
     /// image.
     pub depth_images: bool,
@@ -136,7 +137,7 @@ impl TemperedIntegrator {
             sample_share: None,
             hybrid_auto: false,
             measure_efficiency: false,
-            bridge_normalisation: false,
+            bridge_above: None,
             depth_images: false,
             independent_below: 0,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
@@ -298,7 +299,7 @@ impl Integrator for TemperedIntegrator {
             .with_chain_efficiency(self.chain_efficiency)
             .with_sample_share(self.sample_share)
             .with_measured_efficiency(self.measure_efficiency)
-            .with_bridge_normalisation(self.bridge_normalisation);
+            .with_bridge_above(self.bridge_above);
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
