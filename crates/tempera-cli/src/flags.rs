@@ -70,8 +70,8 @@ pub struct IntegratorFlags {
     #[arg(long)]
     pub measure_efficiency: bool,
     /// MMLT and tempered MMLT: scale each depth's share of the image by the bridge estimate of
-    /// its normalisation (`b_bridge` in --stats) instead of `b` where there is one and `b`'s
-    /// reported relative error (`b_rel_se`) exceeds E (0: wherever there is one)
+    /// its normalisation (`b_bridge` in --stats) instead of `b` where `b`'s reported relative
+    /// error (`b_rel_se`) exceeds E and the bridge reports at most half of it (inf: never)
     #[arg(long, value_name = "E")]
     pub bridge_above: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).

@@ -304,55 +304,44 @@ fn the_ladder_estimate_agrees_with_b_down_a_roughened_ladder() {
     }
 }
 
-/// `bridge_above` scales each depth's share of the image by its bridge estimate where `b`'s
-/// reported relative error exceeds the threshold: for MMLT each depth image is the plain
-/// render's times `b_bridge/b` at those depths and unchanged at the others (the chains and
-/// their splats are the same), and MMLT and tempered MMLT so normalised agree with BDPT on a
-/// Cornell box.
+/// `bridge_above` scales each depth's share of the image by its bridge estimate where
+/// [`crate::mcmc::bridge::prefer`] says so (`b`'s reported relative error above the threshold,
+/// the bridge's at most half of it): each MMLT depth image is the plain render's times
+/// `b_bridge/b` at those depths and unchanged at the others (the chains and their splats are
+/// the same). On the default scene with a small bootstrap some depths' `b` has found a bright
+/// path and some not. (That the bridge estimate agrees with `b` is tested above.)
 #[test]
-fn bridge_above_scales_the_depths_past_its_threshold_by_their_bridge_estimate_and_agrees_with_bdpt() {
-    let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
+fn bridge_above_scales_the_depths_it_prefers_by_their_bridge_estimate() {
+    let mut scene = crate::scenes::default_scene().build().unwrap();
+    scene.set_resolution(32, 24);
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
-    let settings = RenderSettings { budget: Budget::Samples(1024), seed: 4, threads: 0 };
-    let plain = MmltIntegrator { bootstrap: 50_000, depth_images: true, ..MmltIntegrator::new(5) };
-    let a = plain.render(&scene, &settings, &control).unwrap();
-    // A threshold between the second and third largest relative errors of the depths whose
-    // bridge estimate differs from `b`: two depths take it, the others keep `b`.
-    let differs = |d: &crate::mcmc::DepthStats| d.b_bridge > 0.0 && (d.b_bridge / d.b - 1.0).abs() > 1e-6;
-    let mut errors: Vec<f64> = a.chains.iter().filter(|d| differs(d)).map(|d| d.b_rel_se).collect();
-    errors.sort_by(|x, y| y.total_cmp(x));
-    assert!(errors.len() >= 3 && errors[1] > errors[2], "{:?}", a.chains);
-    let threshold = 0.5 * (errors[1] + errors[2]);
-    let bridged = MmltIntegrator { bridge_above: Some(threshold), ..plain };
-    let b = bridged.render(&scene, &settings, &control).unwrap();
+    let settings = RenderSettings { budget: Budget::Samples(512), seed: 1, threads: 0 };
+    let plain = MmltIntegrator {
+        bootstrap: 2_000,
+        large_step_probability: 0.05,
+        normaliser_share: 0.0,
+        bridge_above: None,
+        depth_images: true,
+        ..MmltIntegrator::new(8)
+    };
+    let above = 0.05;
+    let bridged = MmltIntegrator { bridge_above: Some(above), ..plain };
+    let (a, b) =
+        (plain.render(&scene, &settings, &control).unwrap(), bridged.render(&scene, &settings, &control).unwrap());
+    // Depths where b is uncertain and the bridge is preferred, and where both are uncertain.
     let (mut scaled, mut kept) = (0, 0);
     for (k, (pa, pb)) in a.layers.iter().zip(&b.layers).enumerate() {
         let d = &a.chains[k];
-        let ratio = if d.b_bridge > 0.0 && d.b_rel_se > threshold { d.b_bridge / d.b } else { 1.0 };
+        let prefer = crate::mcmc::bridge::prefer(d, above);
+        let ratio = if prefer { d.b_bridge / d.b } else { 1.0 };
         for (x, y) in pa.pixels.iter().zip(&pb.pixels) {
             let (x, y) = (f64::from(luminance(*x)), f64::from(luminance(*y)));
             assert!((y - x * ratio).abs() <= 1e-5 * (x * ratio).abs() + 1e-12, "depth {k}: {y} vs {x} × {ratio}");
         }
-        scaled += usize::from(differs(d) && d.b_rel_se > threshold);
-        kept += usize::from(differs(d) && d.b_rel_se <= threshold);
+        scaled += usize::from(prefer && (ratio - 1.0).abs() > 1e-3);
+        kept += usize::from(!prefer && d.b_rel_se > above && d.b_bridge > 0.0 && (d.b_bridge / d.b - 1.0).abs() > 1e-3);
     }
-    assert_eq!((scaled, kept), (2, errors.len() - 2));
-    let tempered = TemperedIntegrator { bootstrap: 50_000, bridge_above: Some(0.0), ..TemperedIntegrator::new(5) };
-    let t = tempered.render(&scene, &RenderSettings { budget: Budget::Samples(512), ..settings }, &control).unwrap();
-    let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
-    let reference = block_stats(&bdpt.image, 16);
-    let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
-    for (name, image) in [("mmlt", &b.image), ("tempered", &t.image)] {
-        let blocks = block_stats(image, 16);
-        assert!(
-            (mean(&blocks) / mean(&reference) - 1.0).abs() < 0.02,
-            "{name}: {} vs {}",
-            mean(&blocks),
-            mean(&reference)
-        );
-        for (i, ((m, _), (r, s))) in blocks.iter().zip(&reference).enumerate() {
-            assert!((m - r).abs() < 4.0 * s + 0.04 * r, "{name} block {i}: {m} vs {r} ± {s}");
-        }
-    }
+    // Seed 1 gives 2 and 5.
+    assert!(scaled >= 1 && kept >= 1, "{scaled} scaled, {kept} kept: {:?}", a.chains);
 }

@@ -52,7 +52,7 @@ pub struct MmltIntegrator {
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
     /// Scale each depth's image by the bridge estimate of its normalisation instead of `b` where
-    /// `b`'s reported relative error exceeds this ([`crate::mcmc::bridge`]; `None`: never).
+    /// [`crate::mcmc::bridge::prefer`] says so at this threshold (`None`: never).
     pub bridge_above: Option<f64>,
 }
 
@@ -74,7 +74,7 @@ impl MmltIntegrator {
             sample_share: None,
             hybrid_auto: false,
             measure_efficiency: false,
-            bridge_above: None,
+            bridge_above: Some(crate::mcmc::bridge::DEFAULT_ABOVE),
         }
     }
 }

@@ -233,8 +233,9 @@ pub struct IntegratorSettings {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub measure_efficiency: Option<bool>,
     /// MMLT and tempered MMLT: scale each depth's image (replica 0's layer) by the bridge
-    /// estimate of its normalisation (`b_bridge`) instead of `b` where there is one and `b`'s
-    /// reported relative error (`b_rel_se`) exceeds this (0: wherever there is one).
+    /// estimate of its normalisation (`b_bridge`) instead of `b` where `b`'s reported relative
+    /// error (`b_rel_se`) exceeds this and the bridge reports at most half of it
+    /// ([`crate::mcmc::bridge::prefer`]; infinity: never).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bridge_above: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
@@ -424,7 +425,7 @@ impl IntegratorSettings {
         check_probability("collapse_above", self.collapse_above)?;
         check_probability("collapse_below", self.collapse_below)?;
         check_range("normaliser_share", self.normaliser_share, 0.0..=1.0)?;
-        check_range("bridge_above", self.bridge_above, 0.0..=1e6)?;
+        check_range("bridge_above", self.bridge_above, 0.0..=f64::INFINITY)?;
         if self.hybrid.is_some_and(|r| !(0.0..=100.0).contains(&r.ratio())) {
             return Err("hybrid must be between 0 and 100 samples per mutation".into());
         }

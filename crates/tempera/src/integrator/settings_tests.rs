@@ -78,6 +78,17 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
             IntegratorSettings { hybrid_share: Some(0.5), ..Default::default() },
             "hybrid_share is not",
         ),
+        (
+            IntegratorKind::Mmlt,
+            IntegratorSettings { bridge_above: Some(-0.1), ..Default::default() },
+            "bridge_above must lie",
+        ),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { bridge_above: Some(f64::NAN), ..Default::default() },
+            "bridge_above must lie",
+        ),
+        (IntegratorKind::Path, IntegratorSettings { bridge_above: Some(0.1), ..Default::default() }, "not a setting"),
         (IntegratorKind::Sppm, IntegratorSettings { radius: Some(-1.0), ..Default::default() }, "radius must be"),
         (IntegratorKind::Sppm, IntegratorSettings { photons: Some(0), ..Default::default() }, "photons must lie"),
         (IntegratorKind::Mmlt, IntegratorSettings { collapse_above: Some(0.5), ..Default::default() }, "not a setting"),

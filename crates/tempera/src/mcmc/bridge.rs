@@ -29,6 +29,23 @@
 use super::Moments;
 use super::stats::BridgeSums;
 
+/// The default threshold of `b`'s reported relative error past which a depth may take its
+/// bridge estimate ([`prefer`]; measured in the README, "Bridge only where `b` is uncertain").
+pub const DEFAULT_ABOVE: f64 = 0.1;
+
+/// The most of `b`'s reported relative error the bridge estimate may report where it replaces
+/// `b` ([`prefer`]).
+pub const PRECISION: f64 = 0.5;
+
+/// Whether a depth's image takes its bridge estimate instead of `b` at the threshold `above`:
+/// where it has one, `b` reports a relative error above `above` (a mean of uniform samples
+/// moved by a few bright paths) and the bridge reports at most [`PRECISION`] times that (its
+/// error is taken over the chains, which a rare path moves less). Where both are uncertain,
+/// as at depths the chains have barely visited, `b` stays.
+pub fn prefer(d: &super::DepthStats, above: f64) -> bool {
+    d.b_bridge > 0.0 && d.b_rel_se > above && d.b_bridge_rel_se <= PRECISION * d.b_rel_se
+}
+
 /// The bridge estimate from the uniform values `uniform` (the bootstrap's, valued `f`) and the
 /// group's chains' sums (`chains`, one per chain, at the level they carry); with its relative
 /// standard error. `None` where the chains made no mutation or no value was positive.
@@ -187,5 +204,25 @@ mod tests {
         assert_eq!(estimate(&[0.0, 0.0], &[s]), None);
         assert_eq!(estimate(&[1.0], &[BridgeSums { level: 0.0, ..s }]), None);
         assert!(estimate(&[1.0], &[s]).is_some());
+    }
+
+    /// The bridge replaces `b` only where `b` is uncertain past the threshold and the bridge
+    /// reports at most half of `b`'s error.
+    #[test]
+    fn prefer_takes_the_bridge_only_where_b_is_uncertain_and_the_bridge_is_not() {
+        let d = |b_rel_se, b_bridge, b_bridge_rel_se| super::super::DepthStats {
+            b: 1.0,
+            b_rel_se,
+            b_bridge,
+            b_bridge_rel_se,
+            ..Default::default()
+        };
+        assert!(prefer(&d(0.3, 0.8, 0.1), 0.1));
+        assert!(prefer(&d(0.3, 0.8, 0.14), 0.1));
+        assert!(!prefer(&d(0.3, 0.8, 0.16), 0.1), "the bridge as uncertain as b");
+        assert!(!prefer(&d(0.08, 0.8, 0.01), 0.1), "b certain enough");
+        assert!(!prefer(&d(0.3, 0.0, 0.0), 0.1), "no bridge estimate");
+        assert!(prefer(&d(0.01, 0.8, 0.005), 0.0));
+        assert!(!prefer(&d(0.3, 0.8, 0.1), f64::INFINITY), "an infinite threshold: never");
     }
 }

@@ -120,8 +120,8 @@ pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) 
 /// depth, summed over the ranks) add their share ([`super::hybrid`]). Groups whose walkers
 /// splat in halves ([`Group::odd`]) get their chain efficiency measured, with the film's
 /// filter energy `kappa` ([`super::efficiency`]). With `bridge_above` each group's main layer
-/// is scaled by its bridge estimate ([`super::bridge`]) instead of `b` where it has one and
-/// `b`'s reported relative error exceeds the threshold.
+/// is scaled by its bridge estimate ([`super::bridge`]) instead of `b` where
+/// [`super::bridge::prefer`] says so.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn develop<L: Layers>(
     boots: &[Bootstrap],
@@ -209,7 +209,7 @@ pub(super) fn develop<L: Layers>(
                     });
                     (d.b + hot.sum::<f64>(), 1.0)
                 }
-                (0, _) if d.b_bridge > 0.0 && bridge_above.is_some_and(|e| d.b_rel_se > e) => (d.b_bridge, 1.0),
+                (0, _) if bridge_above.is_some_and(|e| super::bridge::prefer(d, e)) => (d.b_bridge, 1.0),
                 (0, _) => (d.b, 1.0),
                 (_, Some((moments, ratio))) => (refine(moments, &large[k][l]).0, ratio),
                 (_, None) => continue,

@@ -73,8 +73,8 @@ pub struct ChainSettings {
     /// their own ([`Group::odd`]; [`super::efficiency`]), developed with the others.
     pub measure_efficiency: bool,
     /// Scale each group's main layer by the bridge estimate of its normalisation
-    /// ([`super::bridge`]) instead of `b` where there is one and `b`'s reported relative error
-    /// exceeds this (`Some(0.0)`: wherever there is one; `None`: never).
+    /// ([`super::bridge`]) instead of `b` where [`super::bridge::prefer`] says so at this
+    /// threshold (`None`: never).
     pub bridge_above: Option<f64>,
 }
 

@@ -87,8 +87,7 @@ pub struct TemperedIntegrator {
     /// ([`crate::mcmc::efficiency`]).
     pub measure_efficiency: bool,
     /// Scale each depth's replica-0 layer by the bridge estimate of its normalisation instead
-    /// of `b` where `b`'s reported relative error exceeds this ([`crate::mcmc::bridge`];
-    /// `None`: never).
+    /// of `b` where [`crate::mcmc::bridge::prefer`] says so at this threshold (`None`: never).
     pub bridge_above: Option<f64>,
     /// Also produce one image per path depth (`depth0` … `depth{max_depth}`), which sum to the
     /// image.
@@ -137,7 +136,7 @@ impl TemperedIntegrator {
             sample_share: None,
             hybrid_auto: false,
             measure_efficiency: false,
-            bridge_above: None,
+            bridge_above: Some(crate::mcmc::bridge::DEFAULT_ABOVE),
             depth_images: false,
             independent_below: 0,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
@@ -162,6 +161,7 @@ impl TemperedIntegrator {
             reuse_replicas: false,
             independent_below: 0,
             normaliser_share: 0.0,
+            bridge_above: None,
             hybrid: 0.0,
             ..Self::new(max_depth)
         }
