@@ -102,6 +102,11 @@ pub struct IntegratorFlags {
     /// every depth).
     #[arg(long)]
     pub pilot: Option<u64>,
+    /// Tempered MMLT: ensembles only at the depths whose bootstrap holds fewer than N non-zero
+    /// values (a few start states for all their chains); plain MMLT chains at the others (0:
+    /// ensembles at every depth).
+    #[arg(long, value_name = "N")]
+    pub ensembles_below: Option<usize>,
     /// Tempered MMLT: how each depth's ladder is tuned (default: bootstrap, before the first
     /// mutation; ignored with --ladder).
     #[arg(long, value_enum)]
@@ -195,6 +200,7 @@ impl IntegratorFlags {
             collapse_above: self.collapse_above,
             collapse_below: self.collapse_below,
             pilot: self.pilot,
+            ensembles_below: self.ensembles_below,
             tempered_mis: self.tempered_mis,
             tuning: self.tuning,
             burn_in: self.burn_in,

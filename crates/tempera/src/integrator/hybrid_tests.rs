@@ -76,6 +76,7 @@ fn hybrid_keeps_the_image_with_clamped_targets_and_tempered_ensembles() {
         reuse_replicas: false,
         hybrid: 0.2,
         chain_efficiency: 1.0,
+        ensembles_below: 0,
         ..TemperedIntegrator::new(5)
     };
     let out = render_with(&scene, &tempered, Budget::Samples(512), 4, 0);
@@ -127,8 +128,13 @@ fn hybrid_auto_chooses_by_a_pilot_and_keeps_the_image() {
     assert!(spp >= 8 && one.stats.pixel_samples == spp * 24 * 24, "{spp} spp, {:?}", one.stats);
     assert!((mean(&one.image) / mean(&bdpt.image) - 1.0).abs() < 0.02, "{} vs {}", mean(&one.image), mean(&bdpt.image));
     assert!(one.image.pixels == render_with(&scene, &m, Budget::Samples(256), 5, 3).image.pixels);
-    let tempered =
-        TemperedIntegrator { bootstrap: 20_000, chains: 16, hybrid_auto: true, ..TemperedIntegrator::new(5) };
+    let tempered = TemperedIntegrator {
+        bootstrap: 20_000,
+        chains: 16,
+        hybrid_auto: true,
+        ensembles_below: 0,
+        ..TemperedIntegrator::new(5)
+    };
     let out = render_with(&scene, &tempered, Budget::Samples(128), 6, 0);
     assert!(out.chains[0].hybrid_choice.is_some_and(|c| c.bdpt_alone()), "{:?}", out.chains[0]);
     assert!((mean(&out.image) / mean(&bdpt.image) - 1.0).abs() < 0.02, "{} vs {}", mean(&out.image), mean(&bdpt.image));

@@ -262,6 +262,7 @@ fn the_bridge_estimate_agrees_with_b_where_the_chains_mix() {
         bootstrap: 20_000,
         tuning: LadderTuning::BurnIn,
         burn_in: 50,
+        ensembles_below: 0,
         ..TemperedIntegrator::new(4)
     };
     for out in
@@ -295,7 +296,12 @@ fn the_ladder_estimate_agrees_with_b_down_a_roughened_ladder() {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     let settings = RenderSettings { budget: Budget::Samples(512), seed: 5, threads: 0 };
-    let tempered = TemperedIntegrator { bootstrap: 50_000, ladder: vec![0.3, 1.0], ..TemperedIntegrator::new(4) };
+    let tempered = TemperedIntegrator {
+        bootstrap: 50_000,
+        ladder: vec![0.3, 1.0],
+        ensembles_below: 0,
+        ..TemperedIntegrator::new(4)
+    };
     let out = tempered.render(&scene, &settings, &control).unwrap();
     for d in out.chains.iter().filter(|d| (1..=3).contains(&d.depth)) {
         assert!(d.b_ladder > 0.0, "depth {}: no ladder estimate", d.depth);

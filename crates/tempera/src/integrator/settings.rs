@@ -145,6 +145,10 @@ pub enum Allocation {
     Normalisation,
     /// In proportion to `b_k` times the spread of the depth's non-zero bootstrap values.
     Spread,
+    /// Tempered MMLT: by `b_k` times spread at the depths whose bootstrap holds fewer non-zero
+    /// values than `ensembles_below` (the depths with ensembles, and depth 0 where it is as
+    /// sparse), by `b_k` alone, as MMLT allots, at the others.
+    Sparse,
 }
 
 /// Which states of each replica splat when every replica contributes to the image.
@@ -281,6 +285,10 @@ pub struct IntegratorSettings {
     /// their replicas (0: ensembles at every depth).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pilot: Option<u64>,
+    /// Tempered MMLT: ensembles only at the depths whose bootstrap holds fewer than this many
+    /// non-zero values, plain MMLT chains at the others (0: ensembles at every depth).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ensembles_below: Option<usize>,
     /// Tempered MMLT: with reuse, which of each replica's states splat.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replica_splats: Option<ReplicaSplats>,
@@ -370,6 +378,7 @@ impl IntegratorSettings {
             ("swap_target", self.swap_target.is_some(), tempered),
             ("reuse_replicas", self.reuse_replicas.is_some(), tempered),
             ("pilot", self.pilot.is_some(), tempered),
+            ("ensembles_below", self.ensembles_below.is_some(), tempered),
             ("replica_splats", self.replica_splats.is_some(), tempered),
             ("flattening", self.flattening.is_some(), tempered),
             ("swap_every", self.swap_every.is_some(), tempered),
@@ -403,6 +412,7 @@ impl IntegratorSettings {
                 ("collapse_above", self.collapse_above.is_some()),
                 ("collapse_below", self.collapse_below.is_some()),
                 ("pilot", self.pilot.is_some()),
+                ("ensembles_below", self.ensembles_below.is_some()),
                 ("swap_target", self.swap_target.is_some()),
             ];
             if let Some((name, _)) = fixed.iter().find(|f| f.1) {
@@ -447,6 +457,7 @@ impl IntegratorSettings {
         check_range("swap_every", self.swap_every, 1..=1_000_000)?;
         check_range("hot_every", self.hot_every, 1..=1_000_000)?;
         check_range("pilot", self.pilot, 0..=10_000_000)?;
+        check_range("ensembles_below", self.ensembles_below, 0..=100_000_000)?;
         check_range("photons", self.photons, 1..=1_000_000_000)?;
         if let Some(r) = self.radius
             && !(r.is_finite() && r > 0.0)
@@ -484,6 +495,9 @@ impl IntegratorSettings {
         }
         if self.swap == Some(Swap::Mixture) && self.reuse_replicas == Some(false) {
             return Err("the mixture target reuses every replica by construction: drop --no-reuse-replicas".into());
+        }
+        if self.allocation == Some(Allocation::Sparse) && kind != IntegratorKind::Tempered {
+            return Err("allocation sparse follows tempered MMLT's ensembles_below: use normalisation or spread".into());
         }
         Ok(())
     }
@@ -547,7 +561,8 @@ pub fn create(
                 bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
                 chains: s.chains.unwrap_or(m.chains),
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
-                spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
+                spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a != Allocation::Normalisation),
+                spread_only_sparse: s.allocation.map_or(m.spread_only_sparse, |a| a == Allocation::Sparse),
                 replicas: s.replica_count().unwrap_or(m.replicas),
                 independent_below: s.independent_below.unwrap_or(m.independent_below),
                 normaliser_share: s.normaliser_share.unwrap_or(m.normaliser_share),
@@ -557,6 +572,7 @@ pub fn create(
                 collapse_above: s.collapse_above.or(m.collapse_above),
                 collapse_below: s.collapse_below.or(m.collapse_below),
                 pilot: s.pilot.unwrap_or(m.pilot),
+                ensembles_below: s.ensembles_below.unwrap_or(m.ensembles_below),
                 roughen_mis: s.tempered_mis.map_or(m.roughen_mis, |t| t == TemperedMis::Roughened),
                 tuning: s.tuning.or(s.burn_in.map(|_| LadderTuning::BurnIn)).unwrap_or(m.tuning),
                 burn_in: s.burn_in.unwrap_or(m.burn_in),

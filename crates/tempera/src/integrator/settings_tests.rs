@@ -92,6 +92,12 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
         (IntegratorKind::Sppm, IntegratorSettings { radius: Some(-1.0), ..Default::default() }, "radius must be"),
         (IntegratorKind::Sppm, IntegratorSettings { photons: Some(0), ..Default::default() }, "photons must lie"),
         (IntegratorKind::Mmlt, IntegratorSettings { collapse_above: Some(0.5), ..Default::default() }, "not a setting"),
+        (IntegratorKind::Mmlt, IntegratorSettings { ensembles_below: Some(64), ..Default::default() }, "not a setting"),
+        (
+            IntegratorKind::Mmlt,
+            IntegratorSettings { allocation: Some(Allocation::Sparse), ..Default::default() },
+            "follows tempered MMLT's ensembles_below",
+        ),
         (
             IntegratorKind::Tempered,
             IntegratorSettings { tuning: Some(LadderTuning::Bootstrap), burn_in: Some(100), ..Default::default() },

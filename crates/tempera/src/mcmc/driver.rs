@@ -47,6 +47,10 @@ pub struct ChainSettings {
     /// ([`Bootstrap::spread`]) instead of `b` alone: a group whose light is carried by a few
     /// rare paths (a caustic) mixes slowly and gets more.
     pub spread_allocation: bool,
+    /// With [`Self::spread_allocation`], the spread counts only for the groups whose bootstrap
+    /// holds fewer non-zero values than this; the others are allotted by `b` alone (0: every
+    /// group by `b` times spread).
+    pub spread_below: usize,
     /// Also develop one image per group (MMLT and tempering: per path depth) into
     /// [`RenderOutput::layers`]; they sum to the image.
     pub group_images: bool,
@@ -122,6 +126,7 @@ impl ChainSettings {
             sigma,
             large_step_probability,
             spread_allocation: false,
+            spread_below: 0,
             group_images: false,
             independent_below: 0,
             normaliser_share: super::normaliser::DEFAULT_SHARE,
@@ -192,6 +197,12 @@ impl ChainSettings {
         Self { group_images: on, ..self }
     }
 
+    /// These settings with the spread counting only for the groups whose bootstrap holds fewer
+    /// than `n` non-zero values (0: for every group).
+    pub fn with_spread_below(self, n: usize) -> Self {
+        Self { spread_below: n, ..self }
+    }
+
     /// These settings with mutations allotted by `b` times spread when `spread` is set.
     pub fn with_spread_allocation(self, spread: bool) -> Self {
         Self { spread_allocation: spread, ..self }
@@ -249,7 +260,8 @@ impl ChainSettings {
     /// 2014), times the spread of its values with [`Self::spread_allocation`].
     fn weight(&self, boot: &Bootstrap) -> f64 {
         let b = boot.b();
-        if self.spread_allocation { b * boot.spread() } else { b }
+        let sparse = self.spread_below == 0 || (boot.nonzero() as usize) < self.spread_below;
+        if self.spread_allocation && sparse { b * boot.spread() } else { b }
     }
 
     /// The walkers of every group with light: under a fixed budget each group's share of the

@@ -24,6 +24,10 @@ pub struct TemperedIntegrator {
     pub large_step_probability: f32,
     /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
     pub spread_allocation: bool,
+    /// With [`Self::spread_allocation`] and [`Self::ensembles_below`], the spread counts only at
+    /// the depths whose bootstrap is that sparse; the others are allotted by `b_k`, as MMLT
+    /// allots them.
+    pub spread_only_sparse: bool,
     /// Replicas per ensemble (1: plain MMLT).
     pub replicas: usize,
     pub swap: Swap,
@@ -43,6 +47,12 @@ pub struct TemperedIntegrator {
     /// Sweeps of the pilot that decides, per depth, whether its ensembles pay for their
     /// replicas (measured against plain MMLT chains; 0: ensembles at every depth).
     pub pilot: u64,
+    /// Ensembles only at the depths whose bootstrap holds fewer than this many non-zero
+    /// values; the others run plain MMLT chains (0: ensembles at every depth `k ≥ 1`). Where
+    /// the bootstrap holds thousands of states with light, a depth's chains start spread over
+    /// its modes and mix as they are; where it holds a few, they all start from those few,
+    /// and a hot replica, which finds light more easily, is what moves them on.
+    pub ensembles_below: usize,
     /// Recompute MIS weights from the roughened densities (default: keep the scene's, which
     /// measured better at equal time on the default scene; see the README).
     pub roughen_mis: bool,
@@ -111,6 +121,7 @@ impl TemperedIntegrator {
             large_step_probability: 0.3,
             // Measured better than by b_k alone at 6 of 8 scene × budget pairs (see the README).
             spread_allocation: true,
+            spread_only_sparse: false,
             // Two replicas measured better than five at equal time on every scene tried (see
             // the README); the paper's five are `paper()`.
             replicas: 2,
@@ -120,6 +131,9 @@ impl TemperedIntegrator {
             collapse_above: None,
             collapse_below: None,
             pilot: 0,
+            // Measured better than ensembles at every depth on all four scenes of the tempering
+            // study, and than 512 on veach-ajar and coffee (see the README).
+            ensembles_below: 128,
             roughen_mis: false,
             tuning: LadderTuning::Bootstrap,
             burn_in: 500,
@@ -152,11 +166,13 @@ impl TemperedIntegrator {
             replicas: 5,
             tuning: LadderTuning::BurnIn,
             spread_allocation: false,
+            spread_only_sparse: false,
             max_temperature: 1.0,
             flattening: Flattening::Roughen,
             collapse_above: None,
             collapse_below: None,
             pilot: 0,
+            ensembles_below: 0,
             swap_target: 0.234,
             reuse_replicas: false,
             independent_below: 0,
@@ -215,7 +231,7 @@ impl TemperedIntegrator {
     /// draw their own start states (until the depth's preparation restarts them all).
     fn start_ensemble<'a>(&self, scene: &'a Scene, ladder: &[f32], cx: StartContext) -> Ensemble<'a> {
         let (k, c, seed) = (cx.group.k, cx.c, cx.group.seed);
-        let ladder: &[f32] = if k == 0 { &ladder[..1] } else { ladder };
+        let ladder: &[f32] = if k == 0 || self.plain_depth(cx.bootstrap) { &ladder[..1] } else { ladder };
         let kernel = match self.swap {
             // The mixture's chains never swap.
             Swap::Neighbor | Swap::Mixture => SwapKernel::Neighbor(Neighbor),
@@ -238,6 +254,12 @@ impl TemperedIntegrator {
         }
         let rng = Pcg32::new(hash(&[seed, 0x5a4b, k as u64, c as u64]), 11);
         Ensemble::new(replicas, kernel, self.ensemble_settings(ladder.len()), rng)
+    }
+
+    /// Whether a depth `k ≥ 1` whose bootstrap values are `bootstrap` runs plain MMLT chains
+    /// ([`Self::ensembles_below`]).
+    fn plain_depth(&self, bootstrap: &[f32]) -> bool {
+        self.ensembles_below > 0 && bootstrap.iter().filter(|&&v| v > 0.0).count() >= self.ensembles_below
     }
 
     fn tempering(&self) -> Tempering {
@@ -292,6 +314,7 @@ impl Integrator for TemperedIntegrator {
         control.check_memory(bytes, "a splat buffer per path depth and contributing replica")?;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_spread_allocation(self.spread_allocation)
+            .with_spread_below(if self.spread_only_sparse { self.ensembles_below } else { 0 })
             .with_group_images(self.depth_images)
             .with_independent_below(self.independent_below)
             .with_normaliser_share(self.normaliser_share)

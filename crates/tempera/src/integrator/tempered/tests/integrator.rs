@@ -32,6 +32,7 @@ fn one_replica_reproduces_mmlt_exactly() {
             replicas: 1,
             spread_allocation,
             independent_below,
+            ensembles_below: 0,
             ..TemperedIntegrator::new(5)
         };
         let a = mmlt.render(&scene, &settings(16, 3, 0), &control).unwrap();
@@ -59,6 +60,7 @@ fn every_swap_strategy_agrees_with_bdpt_on_a_cornell_box_and_the_furnace() {
             replicas: 3,
             swap,
             reuse_replicas: false,
+            ensembles_below: 0,
             ..TemperedIntegrator::new(5)
         };
         let out = t.render(&cornell, &settings(512, 2, 0), &control).unwrap();
@@ -108,7 +110,7 @@ fn hot_replicas_and_collapsed_depths_agree_with_bdpt() {
     let (scene, bdpt) = default_scene_and_bdpt();
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
-    let base = TemperedIntegrator { bootstrap: 50_000, chains: 16, ..TemperedIntegrator::new(5) };
+    let base = TemperedIntegrator { bootstrap: 50_000, chains: 16, ensembles_below: 0, ..TemperedIntegrator::new(5) };
     let hot = TemperedIntegrator { ladder: vec![0.3, 1.0, 8.0], replicas: 4, ..base.clone() };
     let collapsed = TemperedIntegrator { collapse_above: Some(0.01), max_temperature: 50.0, ..base.clone() };
     let lazy = TemperedIntegrator { hot_every: 4, ..base.clone() };
@@ -174,14 +176,28 @@ fn every_swap_strategy_agrees_with_bdpt_and_is_deterministic() {
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     for swap in [Swap::Neighbor, Swap::EquiEnergy, Swap::Permutation] {
-        let t = TemperedIntegrator { bootstrap: 50_000, chains: 16, replicas: 4, swap, ..TemperedIntegrator::new(5) };
+        let t = TemperedIntegrator {
+            bootstrap: 50_000,
+            chains: 16,
+            replicas: 4,
+            swap,
+            ensembles_below: 0,
+            ..TemperedIntegrator::new(5)
+        };
         let out = t.render(&scene, &settings(256, 2, 0), &control).unwrap();
         assert_agrees(&format!("{swap:?}"), &out.image, &bdpt.image);
         let swaps = out.chains[2].swaps.as_ref().expect("depth 2 has an ensemble");
         let accepted: u64 = swaps.accepted.iter().sum();
         assert!(swaps.steps > 0 && accepted + swaps.non_identity > 0, "{swap:?}: {swaps:?}");
         assert_eq!(out.chains[2].ladder.len(), 4);
-        let small = TemperedIntegrator { bootstrap: 2_000, chains: 4, replicas: 3, swap, ..TemperedIntegrator::new(4) };
+        let small = TemperedIntegrator {
+            bootstrap: 2_000,
+            chains: 4,
+            replicas: 3,
+            swap,
+            ensembles_below: 0,
+            ..TemperedIntegrator::new(4)
+        };
         let run = |threads| small.render(&scene, &settings(4, 7, threads), &control).unwrap().image.pixels;
         assert!(run(1) == run(2), "{swap:?}: same image at any thread count");
     }
@@ -204,6 +220,7 @@ fn the_pilot_collapses_depths_whose_ensembles_do_not_pay() {
         reuse_replicas: false,
         swap_every: 1_000_000_000,
         pilot: 256,
+        ensembles_below: 0,
         ..TemperedIntegrator::new(5)
     };
     let out = t.render(&cornell, &settings(512, 2, 0), &control).unwrap();
@@ -220,6 +237,50 @@ fn the_pilot_collapses_depths_whose_ensembles_do_not_pay() {
     assert!(run(1) == run(2), "same image at any thread count");
 }
 
+/// `ensembles_below`: ensembles exactly at the depths whose bootstrap holds fewer non-zero
+/// values than the threshold, plain MMLT chains elsewhere. With every depth plain the render is
+/// MMLT's bit for bit (by spread, and with `spread_only_sparse` by `b_k`, as MMLT allots); a
+/// mixed render agrees with BDPT and is the same at any thread count.
+#[test]
+fn ensembles_only_where_the_bootstrap_is_sparse() {
+    let (scene, bdpt) = default_scene_and_bdpt();
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl::new(&cancel, &|_| {});
+    let mmlt = MmltIntegrator { bootstrap: 20_000, chains: 16, ..MmltIntegrator::new(5) };
+    let t = TemperedIntegrator {
+        bootstrap: 20_000,
+        chains: 16,
+        replicas: 2,
+        ensembles_below: 0,
+        ..TemperedIntegrator::new(5)
+    };
+    for spread in [true, false] {
+        let a = MmltIntegrator { spread_allocation: spread, ..mmlt }.render(&scene, &settings(16, 3, 0), &control);
+        let plain = TemperedIntegrator { ensembles_below: 1, spread_only_sparse: !spread, ..t.clone() };
+        let b = plain.render(&scene, &settings(16, 3, 0), &control).unwrap();
+        assert!(a.unwrap().image.pixels == b.image.pixels, "every depth plain is MMLT bit for bit ({spread})");
+    }
+    // A threshold between the depths' counts of non-zero bootstrap values.
+    let a = mmlt.render(&scene, &settings(4, 3, 0), &control).unwrap();
+    let counts: Vec<(usize, u64)> =
+        a.chains.iter().filter(|d| d.depth > 0 && d.mutations > 0).map(|d| (d.depth, d.bootstrap_nonzero)).collect();
+    let mut sorted: Vec<u64> = counts.iter().map(|c| c.1).collect();
+    sorted.sort_unstable();
+    let below = sorted[sorted.len() / 2] as usize;
+    assert!(sorted[0] < below as u64, "the depths' counts differ: {counts:?}");
+    let mixed = TemperedIntegrator { ensembles_below: below, spread_only_sparse: true, ..t };
+    let out = mixed.render(&scene, &settings(256, 2, 0), &control).unwrap();
+    for (depth, nonzero) in counts {
+        let d = out.chains.iter().find(|d| d.depth == depth).unwrap();
+        let ensembles = (nonzero as usize) < below;
+        assert_eq!(d.ladder.len(), if ensembles { 2 } else { 1 }, "depth {depth}, {nonzero} non-zero: {:?}", d.ladder);
+        assert_eq!(d.swaps.is_some(), ensembles, "depth {depth}");
+    }
+    assert_agrees("sparse", &out.image, &bdpt.image);
+    let run = |threads| mixed.render(&scene, &settings(8, 7, threads), &control).unwrap().image.pixels;
+    assert!(run(1) == run(2), "same image at any thread count");
+}
+
 /// `swap_every` spaces the swap steps: one per `n` sweeps of each ensemble.
 #[test]
 fn swap_steps_follow_the_swap_interval() {
@@ -233,6 +294,7 @@ fn swap_steps_follow_the_swap_interval() {
             chains: 8,
             replicas: 3,
             swap_every: every,
+            ensembles_below: 0,
             ..TemperedIntegrator::new(4)
         };
         let out = t.render(&scene, &settings(32, 1, 0), &control).unwrap();

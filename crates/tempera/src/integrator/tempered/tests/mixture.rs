@@ -18,7 +18,13 @@ fn the_mixture_chain_agrees_with_bdpt_and_the_furnace_at_the_cost_of_one_chain()
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
     let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(512), 1, 0);
-    let base = TemperedIntegrator { bootstrap: 50_000, chains: 16, swap: Swap::Mixture, ..TemperedIntegrator::new(5) };
+    let base = TemperedIntegrator {
+        bootstrap: 50_000,
+        chains: 16,
+        swap: Swap::Mixture,
+        ensembles_below: 0,
+        ..TemperedIntegrator::new(5)
+    };
     let cases = [
         ("two targets", base.clone()),
         ("three targets, hot weight 0.25", TemperedIntegrator { replicas: 3, hot_weight: 0.25, ..base.clone() }),

@@ -235,6 +235,7 @@ mod reuse {
             replicas: 4,
             ladder: vec![0.1, 0.3, 0.9],
             reuse_replicas: true,
+            ensembles_below: 0,
             ..TemperedIntegrator::new(5)
         };
         let out = t.render(&scene, &settings(256, 2), &control).unwrap();
@@ -287,7 +288,13 @@ mod splats {
         let seeds = 8;
         let (mut error, mut means) = ([0.0f64; 2], [0.0f64; 2]);
         for (i, replica_splats) in [ReplicaSplats::Expected, ReplicaSplats::States].into_iter().enumerate() {
-            let t = TemperedIntegrator { bootstrap: 20_000, chains: 16, replica_splats, ..TemperedIntegrator::new(3) };
+            let t = TemperedIntegrator {
+                bootstrap: 20_000,
+                chains: 16,
+                replica_splats,
+                ensembles_below: 0,
+                ..TemperedIntegrator::new(3)
+            };
             for seed in 0..seeds {
                 let out = render_with(&scene, &t, Budget::Samples(32), seed, 0).image;
                 means[i] += mean(&out) / seeds as f64;
@@ -334,6 +341,7 @@ mod start {
             replicas: 4,
             ladder: vec![0.2, 0.5, 1.0],
             reuse_replicas: true,
+            ensembles_below: 0,
             ..TemperedIntegrator::new(3)
         };
         let seeds = 8;

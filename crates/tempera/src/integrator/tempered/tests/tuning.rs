@@ -57,7 +57,11 @@ fn acceptance_and_ladder_of(scene: &Scene, t: TemperedIntegrator, mpp: u32) -> (
 /// Neighbour acceptance at depth 2 and the ladder after `burn_in` tuning sweeps.
 fn tune(scene: &Scene, burn_in: u64) -> (f64, Vec<f32>) {
     let tuning = if burn_in > 0 { LadderTuning::BurnIn } else { LadderTuning::None };
-    acceptance_and_ladder(scene, TemperedIntegrator { tuning, burn_in, ..TemperedIntegrator::new(3) }, 16)
+    acceptance_and_ladder(
+        scene,
+        TemperedIntegrator { tuning, burn_in, ensembles_below: 0, ..TemperedIntegrator::new(3) },
+        16,
+    )
 }
 
 /// Tuned by `tuning`, targets 0.8 and 0.9 are measured within ±0.05 in the render and the
@@ -65,7 +69,8 @@ fn tune(scene: &Scene, burn_in: u64) -> (f64, Vec<f32>) {
 fn assert_reaches_targets(tuning: LadderTuning) {
     let scene = glossy_corner(0.08);
     let run = |swap_target| {
-        let t = TemperedIntegrator { tuning, burn_in: 2000, swap_target, ..TemperedIntegrator::new(3) };
+        let t =
+            TemperedIntegrator { tuning, burn_in: 2000, swap_target, ensembles_below: 0, ..TemperedIntegrator::new(3) };
         acceptance_and_ladder(&scene, t, 128)
     };
     let (acc8, ladder8) = run(0.8);
@@ -116,8 +121,13 @@ fn the_bootstrap_tuned_ladder_reaches_a_reachable_target_acceptance() {
 fn a_power_flattened_ladder_reaches_the_papers_acceptance_where_roughening_cannot() {
     const TARGET: f64 = 0.234;
     let scene = glossy_corner(0.08);
-    let t =
-        |flattening| TemperedIntegrator { flattening, replicas: 2, swap_target: TARGET, ..TemperedIntegrator::new(3) };
+    let t = |flattening| TemperedIntegrator {
+        flattening,
+        replicas: 2,
+        swap_target: TARGET,
+        ensembles_below: 0,
+        ..TemperedIntegrator::new(3)
+    };
     let (rough, rough_ladder) = acceptance_and_ladder_of(&scene, t(Flattening::Roughen), 128);
     let (power, power_ladder) = acceptance_and_ladder_of(&scene, t(Flattening::Power), 128);
     assert!(rough_ladder[1] == 1.0, "roughening at its cap: {rough} with {rough_ladder:?}");
