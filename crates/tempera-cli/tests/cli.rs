@@ -280,7 +280,20 @@ fn tempered_renders_with_every_swap_strategy_and_reports_swaps() {
         let out = tempera()
             .current_dir(&dir)
             .args(["render", "--integrator", "tempered", "--mpp", "2", "--bootstrap", "2000", "--maxdepth", "3"])
-            .args(["--resolution", "16x16", "--swap", swap, "--ladder", "0.05,0.2", "-o", "t.exr", "--stats", &json])
+            .args([
+                "--ensembles-below",
+                "0",
+                "--resolution",
+                "16x16",
+                "--swap",
+                swap,
+                "--ladder",
+                "0.05,0.2",
+                "-o",
+                "t.exr",
+                "--stats",
+                &json,
+            ])
             .output()
             .unwrap();
         assert!(out.status.success(), "{swap}: {}", stderr(&out));

@@ -55,7 +55,7 @@ fn ranks_render_the_single_process_image_byte_for_byte() {
         ("mmlt", &["--mpp", "4", "--bootstrap", "4000"]),
         ("mmlt", &["--mpp", "4", "--bootstrap", "4000", "--hybrid", "0.5", "--measure-efficiency"]),
         ("pssmlt", &["--mpp", "4", "--bootstrap", "4000"]),
-        ("tempered", &["--mpp", "3", "--bootstrap", "4000"]),
+        ("tempered", &["--mpp", "3", "--bootstrap", "4000", "--ensembles-below", "0"]),
         ("sppm", &["--spp", "3", "--photons", "3000", "--radius", "0.1"]),
     ];
     for (integrator, budget) in runs {

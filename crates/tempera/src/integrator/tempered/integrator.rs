@@ -131,8 +131,8 @@ impl TemperedIntegrator {
             collapse_above: None,
             collapse_below: None,
             pilot: 0,
-            // Measured better than ensembles at every depth on all four scenes of the tempering
-            // study, and than 512 on veach-ajar and coffee (see the README).
+            // Chosen by measurement against ensembles at every depth and at 512 (README,
+            // "Ensembles only where the bootstrap is sparse").
             ensembles_below: 128,
             roughen_mis: false,
             tuning: LadderTuning::Bootstrap,
