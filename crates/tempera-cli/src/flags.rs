@@ -29,8 +29,9 @@ pub struct IntegratorFlags {
     #[arg(long)]
     pub large_step: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths: in proportion to their
-    /// normalisation b_k (MMLT's default), or to b_k times the spread of their light over their
-    /// paths (tempered MMLT's default).
+    /// normalisation b_k (MMLT's default), to b_k times the spread of their light over their
+    /// paths, or (tempered MMLT only, its default) by b_k times spread at the depths with
+    /// ensembles and by b_k elsewhere.
     #[arg(long, value_enum)]
     pub allocation: Option<Allocation>,
     /// MMLT and tempered MMLT: sample the depths whose bootstrap has fewer than N non-zero

@@ -80,9 +80,10 @@ impl MmltIntegrator {
 }
 
 /// The MMLT target of one path depth.
-struct DepthTarget<'a> {
-    scene: &'a Scene,
-    depth: usize,
+#[derive(Clone, Copy)]
+pub(crate) struct DepthTarget<'a> {
+    pub scene: &'a Scene,
+    pub depth: usize,
 }
 
 impl Target for DepthTarget<'_> {

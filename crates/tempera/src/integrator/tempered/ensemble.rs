@@ -360,107 +360,117 @@ impl Walker for Ensemble<'_> {
         self.replicas.chains.iter().map(Chain::rays).sum()
     }
 
-    /// Tunes the depth's shared ladder, values the depth's bootstrap under the frozen ladder,
-    /// restarts every replica from it in proportion to its own target and (with reuse)
-    /// calibrates the replicas' normalisations.
+    /// [`prepare_ensembles`].
     fn prepare_group(
         ensembles: &mut [Self],
         group: &GroupContext,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> (EnsembleGroup, u64) {
-        if ensembles.is_empty() || ensembles[0].replicas.len() < 2 {
-            return (EnsembleGroup::default(), 0);
-        }
-        let (k, main) = (ensembles[0].replicas.len(), ensembles[0].replicas.targets[0]);
-        let EnsembleSettings { calibration_samples: samples, tuning, collapse_above, collapse_below, .. } =
-            ensembles[0].settings;
-        let collapses = |acceptance: f64| {
-            collapse_above.is_some_and(|limit| acceptance > limit)
-                || collapse_below.is_some_and(|limit| acceptance < limit)
-        };
-        let (calibration, rays) = match tuning.map(|t| (t, t.method)) {
-            Some((tuning, TuningMethod::Bootstrap)) => {
-                // The bootstrap valued under every candidate temperature; the ladder chosen
-                // from it keeps the columns of its rungs.
-                let grid = candidate_temperatures(tuning.max_temperature, tuning.flattening);
-                let candidates: Vec<TemperedTarget> = grid
-                    .iter()
-                    .map(|&tau| {
-                        let mut t = main;
-                        t.set_temperature(tau);
-                        t
-                    })
-                    .collect();
-                let (all, rays) = Calibration::new(&candidates, group, samples);
-                let columns: Vec<Vec<f32>> = (0..grid.len()).map(|g| all.of(g)).collect();
-                match ladder_from_bootstrap(&columns, &grid, k, tuning) {
-                    Some((rungs, acceptance)) => {
-                        if collapses(acceptance) {
-                            return collapse(ensembles, rays);
-                        }
-                        let ladder: Vec<f32> = rungs[1..].iter().map(|&g| grid[g]).collect();
-                        ensembles.par_iter_mut().for_each(|e| e.replicas.set_ladder(&ladder));
-                        (all.select(&rungs), rays)
-                    }
-                    // No light in the bootstrap, or too many replicas for the grid: the ladder
-                    // stays as given.
-                    None => Calibration::new(&ensembles[0].replicas.targets, group, samples),
-                }
-            }
-            Some((tuning, TuningMethod::BurnIn(sweeps))) => {
-                let Some(acceptance) = tune_together(ensembles, sweeps, tuning, stop) else {
-                    // Stopped during the burn-in: nothing of it may show in the statistics.
-                    for e in ensembles.iter_mut() {
-                        e.discard_statistics();
-                    }
-                    return (EnsembleGroup::default(), 0);
-                };
-                if collapses(acceptance) {
-                    return collapse(ensembles, 0);
-                }
-                Calibration::new(&ensembles[0].replicas.targets, group, samples)
-            }
-            None => Calibration::new(&ensembles[0].replicas.targets, group, samples),
-        };
-        if let Some(weight) = ensembles[0].settings.mixture {
-            // The main chains alone mutate, on the mixture: they restart in proportion to it.
-            // A weight w of the hotter targets is a ratio ρ_l/w (any ratio keeps the estimate
-            // unbiased).
-            let mut reuse = Reuse::new(&calibration, k);
-            for rho in reuse.ratios.iter_mut().skip(1) {
-                *rho /= weight;
-            }
-            let targets = &ensembles[0].replicas.targets.clone();
-            let target = MixtureTarget { targets, reuse: &reuse };
-            let values = target.values(&calibration.values);
-            if values.iter().any(|&v| v > 0.0) {
-                let start = Distribution1D::new(&values);
-                ensembles.par_iter_mut().for_each(|e| e.restart_replica(0, &target, &start, group));
-            }
-            ensembles.par_iter_mut().for_each(|e| e.discard_statistics());
-            return (EnsembleGroup { reuse: Some(reuse), mixture: true }, rays);
-        }
-        let starts: Vec<Option<Distribution1D>> = (0..k)
-            .map(|l| {
-                let values = calibration.of(l);
-                values.iter().any(|&v| v > 0.0).then(|| Distribution1D::new(&values))
-            })
-            .collect();
-        let reuse = ensembles[0].settings.reuse_replicas.then(|| Reuse::new(&calibration, k));
-        ensembles.par_iter_mut().for_each(|e| {
-            e.restart(&starts, group);
-            e.discard_statistics();
-        });
-        let shared = EnsembleGroup { reuse, mixture: false };
-        let values = calibration.of(0);
-        let b0 = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len().max(1) as f64;
-        if ensembles_pay(ensembles, &shared, b0, group, stop) == Some(false) {
-            return collapse(ensembles, rays);
-        }
-        // The pilot's statistics are not the render's.
-        ensembles.par_iter_mut().for_each(|e| e.discard_statistics());
-        (shared, rays)
+        let mut ensembles: Vec<&mut Ensemble> = ensembles.iter_mut().collect();
+        prepare_ensembles(&mut ensembles, group, stop)
     }
+}
+
+/// Prepares the ensembles of one depth together ([`Walker::prepare_group`]): tunes the depth's
+/// shared ladder, values the depth's bootstrap under the frozen ladder, restarts every replica
+/// from it in proportion to its own target and (with reuse) calibrates the replicas'
+/// normalisations. Returns what they share and the rays traced.
+pub fn prepare_ensembles(
+    ensembles: &mut [&mut Ensemble],
+    group: &GroupContext,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> (EnsembleGroup, u64) {
+    if ensembles.is_empty() || ensembles[0].replicas.len() < 2 {
+        return (EnsembleGroup::default(), 0);
+    }
+    let (k, main) = (ensembles[0].replicas.len(), ensembles[0].replicas.targets[0]);
+    let EnsembleSettings { calibration_samples: samples, tuning, collapse_above, collapse_below, .. } =
+        ensembles[0].settings;
+    let collapses = |acceptance: f64| {
+        collapse_above.is_some_and(|limit| acceptance > limit) || collapse_below.is_some_and(|limit| acceptance < limit)
+    };
+    let (calibration, rays) = match tuning.map(|t| (t, t.method)) {
+        Some((tuning, TuningMethod::Bootstrap)) => {
+            // The bootstrap valued under every candidate temperature; the ladder chosen
+            // from it keeps the columns of its rungs.
+            let grid = candidate_temperatures(tuning.max_temperature, tuning.flattening);
+            let candidates: Vec<TemperedTarget> = grid
+                .iter()
+                .map(|&tau| {
+                    let mut t = main;
+                    t.set_temperature(tau);
+                    t
+                })
+                .collect();
+            let (all, rays) = Calibration::new(&candidates, group, samples);
+            let columns: Vec<Vec<f32>> = (0..grid.len()).map(|g| all.of(g)).collect();
+            match ladder_from_bootstrap(&columns, &grid, k, tuning) {
+                Some((rungs, acceptance)) => {
+                    if collapses(acceptance) {
+                        return collapse(ensembles, rays);
+                    }
+                    let ladder: Vec<f32> = rungs[1..].iter().map(|&g| grid[g]).collect();
+                    ensembles.par_iter_mut().for_each(|e| e.replicas.set_ladder(&ladder));
+                    (all.select(&rungs), rays)
+                }
+                // No light in the bootstrap, or too many replicas for the grid: the ladder
+                // stays as given.
+                None => Calibration::new(&ensembles[0].replicas.targets, group, samples),
+            }
+        }
+        Some((tuning, TuningMethod::BurnIn(sweeps))) => {
+            let Some(acceptance) = tune_together(ensembles, sweeps, tuning, stop) else {
+                // Stopped during the burn-in: nothing of it may show in the statistics.
+                for e in ensembles.iter_mut() {
+                    e.discard_statistics();
+                }
+                return (EnsembleGroup::default(), 0);
+            };
+            if collapses(acceptance) {
+                return collapse(ensembles, 0);
+            }
+            Calibration::new(&ensembles[0].replicas.targets, group, samples)
+        }
+        None => Calibration::new(&ensembles[0].replicas.targets, group, samples),
+    };
+    if let Some(weight) = ensembles[0].settings.mixture {
+        // The main chains alone mutate, on the mixture: they restart in proportion to it.
+        // A weight w of the hotter targets is a ratio ρ_l/w (any ratio keeps the estimate
+        // unbiased).
+        let mut reuse = Reuse::new(&calibration, k);
+        for rho in reuse.ratios.iter_mut().skip(1) {
+            *rho /= weight;
+        }
+        let targets = &ensembles[0].replicas.targets.clone();
+        let target = MixtureTarget { targets, reuse: &reuse };
+        let values = target.values(&calibration.values);
+        if values.iter().any(|&v| v > 0.0) {
+            let start = Distribution1D::new(&values);
+            ensembles.par_iter_mut().for_each(|e| e.restart_replica(0, &target, &start, group));
+        }
+        ensembles.par_iter_mut().for_each(|e| e.discard_statistics());
+        return (EnsembleGroup { reuse: Some(reuse), mixture: true }, rays);
+    }
+    let starts: Vec<Option<Distribution1D>> = (0..k)
+        .map(|l| {
+            let values = calibration.of(l);
+            values.iter().any(|&v| v > 0.0).then(|| Distribution1D::new(&values))
+        })
+        .collect();
+    let reuse = ensembles[0].settings.reuse_replicas.then(|| Reuse::new(&calibration, k));
+    ensembles.par_iter_mut().for_each(|e| {
+        e.restart(&starts, group);
+        e.discard_statistics();
+    });
+    let shared = EnsembleGroup { reuse, mixture: false };
+    let values = calibration.of(0);
+    let b0 = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len().max(1) as f64;
+    if ensembles_pay(ensembles, &shared, b0, group, stop) == Some(false) {
+        return collapse(ensembles, rays);
+    }
+    // The pilot's statistics are not the render's.
+    ensembles.par_iter_mut().for_each(|e| e.discard_statistics());
+    (shared, rays)
 }
 
 /// Pilot walkers per kind, at most.
@@ -482,7 +492,7 @@ const MIN_PILOT: u64 = 64;
 /// measure the cost, so the decision is the same on every machine, thread count and rank.
 /// Under a fixed budget the pilot takes at most a quarter of the depth's mutations.
 fn ensembles_pay(
-    ensembles: &mut [Ensemble],
+    ensembles: &mut [&mut Ensemble],
     shared: &EnsembleGroup,
     b0: f64,
     group: &GroupContext,
@@ -501,7 +511,7 @@ fn ensembles_pay(
     // Each walker's block luminances and rays per main-chain mutation, running as `run` says
     // into `layers` coarse buffers of its own.
     let measure =
-        |walkers: &mut [Ensemble], layers: usize, run: &(dyn Fn(&mut Ensemble, &[SharedSplats]) -> u64 + Sync)| {
+        |walkers: &mut [&mut Ensemble], layers: usize, run: &(dyn Fn(&mut Ensemble, &[SharedSplats]) -> u64 + Sync)| {
             walkers
                 .par_iter_mut()
                 .map(|e| {
@@ -556,7 +566,7 @@ fn blocks(buffers: &[SharedSplats], scale: f64, mutations: u64) -> Vec<f64> {
 /// Every ensemble of a depth keeps replica 0 alone, as a plain MMLT chain: the replicas barely
 /// differ even at the hottest ladder allowed, and plain chains, continuing from replica 0's
 /// state, cost a K-th.
-fn collapse(ensembles: &mut [Ensemble], rays: u64) -> (EnsembleGroup, u64) {
+fn collapse(ensembles: &mut [&mut Ensemble], rays: u64) -> (EnsembleGroup, u64) {
     for e in ensembles.iter_mut() {
         e.collapse();
     }

@@ -2,13 +2,15 @@
 //! determinism) with one replica ensemble per chain at every depth `k ≥ 1`; depth 0, whose
 //! only strategy has no connection vertex, runs plain MMLT chains.
 
+use super::walker::TemperedWalker;
 use super::{
     Ensemble, EnsembleSettings, EquiEnergy, Neighbor, Permutation, Replicas, SwapKernel, Tuning, TuningMethod,
 };
 use crate::bidir::{Heuristic, Tempering};
+use crate::integrator::mmlt::DepthTarget;
 use crate::integrator::{Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap};
 use crate::math::rng::{Pcg32, hash};
-use crate::mcmc::{ChainSettings, Flattening, StartContext, TemperedTarget};
+use crate::mcmc::{ChainSettings, Flattening, Single, StartContext, TemperedTarget};
 use crate::scene::Scene;
 
 /// Rings of the equi-energy strategy.
@@ -119,9 +121,11 @@ impl TemperedIntegrator {
             chains: 64,
             sigma: 0.01,
             large_step_probability: 0.3,
-            // Measured better than by b_k alone at 6 of 8 scene × budget pairs (see the README).
+            // By b_k times spread at the depths with ensembles, by b_k (as MMLT) elsewhere:
+            // measured against spread everywhere and b_k alone (README, "Allotted as MMLT
+            // where the chains are MMLT's").
             spread_allocation: true,
-            spread_only_sparse: false,
+            spread_only_sparse: true,
             // Two replicas measured better than five at equal time on every scene tried (see
             // the README); the paper's five are `paper()`.
             replicas: 2,
@@ -227,11 +231,23 @@ impl TemperedIntegrator {
         }
     }
 
+    /// Walker `cx.c` of depth `cx.k`: at a plain depth ([`Self::ensembles_below`]) MMLT's
+    /// chain, else an ensemble.
+    fn start_walker<'a>(&self, scene: &'a Scene, ladder: &[f32], cx: StartContext) -> TemperedWalker<'a> {
+        let k = cx.group.k;
+        if k == 0 || self.plain_depth(cx.bootstrap) {
+            if self.swap != Swap::Mixture {
+                return TemperedWalker::Plain(Box::new(Single::start(cx, DepthTarget { scene, depth: k })));
+            }
+            return TemperedWalker::Ensemble(Box::new(self.start_ensemble(scene, &ladder[..1], cx)));
+        }
+        TemperedWalker::Ensemble(Box::new(self.start_ensemble(scene, ladder, cx)))
+    }
+
     /// Ensemble `cx.c` of depth `cx.k`: replica 0 starts exactly as an MMLT chain, the others
     /// draw their own start states (until the depth's preparation restarts them all).
     fn start_ensemble<'a>(&self, scene: &'a Scene, ladder: &[f32], cx: StartContext) -> Ensemble<'a> {
         let (k, c, seed) = (cx.group.k, cx.c, cx.group.seed);
-        let ladder: &[f32] = if k == 0 || self.plain_depth(cx.bootstrap) { &ladder[..1] } else { ladder };
         let kernel = match self.swap {
             // The mixture's chains never swap.
             Swap::Neighbor | Swap::Mixture => SwapKernel::Neighbor(Neighbor),
@@ -326,7 +342,7 @@ impl Integrator for TemperedIntegrator {
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
-        chains.render(scene, settings, control, depths, main, |cx| self.start_ensemble(scene, &ladder, cx))
+        chains.render(scene, settings, control, depths, main, |cx| self.start_walker(scene, &ladder, cx))
     }
 
     fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {

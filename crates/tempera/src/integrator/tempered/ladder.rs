@@ -120,7 +120,7 @@ impl Ladder {
 /// last quarter of the burn-in (averaged over pairs and tuning ensembles), or `None` when
 /// stopped early.
 pub fn tune_together(
-    all: &mut [Ensemble],
+    all: &mut [&mut Ensemble],
     sweeps: u64,
     tuning: Tuning,
     stop: &(dyn Fn() -> bool + Sync),

@@ -27,6 +27,7 @@ mod neighbor;
 mod permutation;
 mod replicas;
 mod reuse;
+mod walker;
 
 #[cfg(test)]
 mod tests;

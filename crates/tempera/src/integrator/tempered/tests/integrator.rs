@@ -239,8 +239,8 @@ fn the_pilot_collapses_depths_whose_ensembles_do_not_pay() {
 
 /// `ensembles_below`: ensembles exactly at the depths whose bootstrap holds fewer non-zero
 /// values than the threshold, plain MMLT chains elsewhere. With every depth plain the render is
-/// MMLT's bit for bit (by spread, and with `spread_only_sparse` by `b_k`, as MMLT allots); a
-/// mixed render agrees with BDPT and is the same at any thread count.
+/// MMLT's bit for bit (by spread, and with `spread_only_sparse` by `b_k`, as MMLT allots, which
+/// the defaults do); a mixed render agrees with BDPT and is the same at any thread count.
 #[test]
 fn ensembles_only_where_the_bootstrap_is_sparse() {
     let (scene, bdpt) = default_scene_and_bdpt();
@@ -260,8 +260,13 @@ fn ensembles_only_where_the_bootstrap_is_sparse() {
         let b = plain.render(&scene, &settings(16, 3, 0), &control).unwrap();
         assert!(a.unwrap().image.pixels == b.image.pixels, "every depth plain is MMLT bit for bit ({spread})");
     }
-    // A threshold between the depths' counts of non-zero bootstrap values.
+    // With its defaults tempered MMLT renders a scene without sparse depths as MMLT does.
     let a = mmlt.render(&scene, &settings(4, 3, 0), &control).unwrap();
+    assert!(a.chains.iter().all(|d| d.depth == 0 || d.bootstrap_nonzero >= 128), "no sparse depth");
+    let defaults = TemperedIntegrator { bootstrap: 20_000, chains: 16, ..TemperedIntegrator::new(5) };
+    let b = defaults.render(&scene, &settings(4, 3, 0), &control).unwrap();
+    assert!(a.image.pixels == b.image.pixels, "the defaults are MMLT's where no depth is sparse");
+    // A threshold between the depths' counts of non-zero bootstrap values.
     let counts: Vec<(usize, u64)> =
         a.chains.iter().filter(|d| d.depth > 0 && d.mutations > 0).map(|d| (d.depth, d.bootstrap_nonzero)).collect();
     let mut sorted: Vec<u64> = counts.iter().map(|c| c.1).collect();
