@@ -1,6 +1,8 @@
 //! The tempered MMLT integrator: MMLT's driver (bootstrap, budgets, `b_k` refinement,
-//! determinism) with one replica ensemble per chain at every depth `k ≥ 1`; depth 0, whose
-//! only strategy has no connection vertex, runs plain MMLT chains.
+//! determinism) with one replica ensemble per chain at the depths `k ≥ 1` that keep ensembles
+//! ([`TemperedIntegrator::ensembles_below`]; 0: every depth `k ≥ 1`). Depth 0, whose only
+//! strategy has no connection vertex, and the other depths run MMLT's chains
+//! ([`super::walker`]).
 
 use super::walker::TemperedWalker;
 use super::{
