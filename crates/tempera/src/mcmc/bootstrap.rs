@@ -290,7 +290,7 @@ impl Bootstrap {
 
     /// How many of the values are non-zero.
     pub fn nonzero(&self) -> u64 {
-        self.values.iter().filter(|&&v| v > 0.0).count() as u64
+        count_nonzero(&self.values)
     }
 
     /// The moments of the values, to be refined with the large steps'.
@@ -334,6 +334,11 @@ pub fn large_step_acceptance(values: &[f32]) -> f64 {
     let pairs: f64 = sorted.iter().enumerate().map(|(r, &v)| v * above(r)).sum();
     let mean_min = 2.0 * pairs / (n * (n - 1.0));
     (mean_min / (sum / n)).min(1.0)
+}
+
+/// How many of a group's bootstrap values are non-zero ([`Bootstrap::nonzero`]).
+pub fn count_nonzero(values: &[f32]) -> u64 {
+    values.iter().filter(|&&v| v > 0.0).count() as u64
 }
 
 /// The moments of the non-zero values among `values`.

@@ -12,6 +12,7 @@ use crate::bidir::{Heuristic, Tempering};
 use crate::integrator::mmlt::DepthTarget;
 use crate::integrator::{Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap};
 use crate::math::rng::{Pcg32, hash};
+use crate::mcmc::bootstrap::count_nonzero;
 use crate::mcmc::{ChainSettings, Flattening, Single, StartContext, TemperedTarget};
 use crate::scene::Scene;
 
@@ -238,10 +239,7 @@ impl TemperedIntegrator {
     fn start_walker<'a>(&self, scene: &'a Scene, ladder: &[f32], cx: StartContext) -> TemperedWalker<'a> {
         let k = cx.group.k;
         if k == 0 || self.plain_depth(cx.bootstrap) {
-            if self.swap != Swap::Mixture {
-                return TemperedWalker::Plain(Box::new(Single::start(cx, DepthTarget { scene, depth: k })));
-            }
-            return TemperedWalker::Ensemble(Box::new(self.start_ensemble(scene, &ladder[..1], cx)));
+            return TemperedWalker::Plain(Box::new(Single::start(cx, DepthTarget { scene, depth: k })));
         }
         TemperedWalker::Ensemble(Box::new(self.start_ensemble(scene, ladder, cx)))
     }
@@ -277,7 +275,7 @@ impl TemperedIntegrator {
     /// Whether a depth `k ≥ 1` whose bootstrap values are `bootstrap` runs plain MMLT chains
     /// ([`Self::ensembles_below`]).
     fn plain_depth(&self, bootstrap: &[f32]) -> bool {
-        self.ensembles_below > 0 && bootstrap.iter().filter(|&&v| v > 0.0).count() >= self.ensembles_below
+        self.ensembles_below > 0 && count_nonzero(bootstrap) >= self.ensembles_below as u64
     }
 
     fn tempering(&self) -> Tempering {

@@ -7,7 +7,7 @@
 use super::ensemble::{Ensemble, EnsembleGroup, prepare_ensembles};
 use crate::film::SharedSplats;
 use crate::integrator::mmlt::DepthTarget;
-use crate::mcmc::{DepthStats, GroupContext, Moments, Single, Walker};
+use crate::mcmc::{DepthStats, GroupContext, Moments, OneLayer, Single, Walker};
 
 /// One walker of tempered MMLT (boxed: a chain holds its states inline, an ensemble its
 /// settings and statistics, and the two differ in size by hundreds of bytes).
@@ -23,7 +23,7 @@ impl Walker for TemperedWalker<'_> {
 
     fn run(&mut self, group: &EnsembleGroup, mutations: u64, splats: &[SharedSplats], stop: &dyn Fn() -> bool) -> u64 {
         match self {
-            Self::Plain(single) => single.chain.run(&single.target, mutations, Some(&splats[0]), stop),
+            Self::Plain(single) => single.run(&OneLayer, mutations, splats, stop),
             Self::Ensemble(e) => e.run(group, mutations, splats, stop),
         }
     }
