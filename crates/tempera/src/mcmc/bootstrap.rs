@@ -207,8 +207,14 @@ impl Bootstrap {
     /// bootstrap alone, tens of thousands of one-strategy samples, can miss the bright paths
     /// one large step in a hundred thousand finds; weighted by the bootstrap's variance, such
     /// a step then decided the depth's normalisation.) Otherwise the bootstrap's values fall
-    /// into folds too, each weighted with the variance of the other folds' values. The
-    /// relative error reported is the inverse-variance one over all samples.
+    /// into folds too, each weighted with the variance of the other folds' values.
+    ///
+    /// The relative error reported is that of the combination as weighted, over all samples,
+    /// with the values' variance the larger of the normaliser's measurement and the values' own
+    /// spread. Where the normaliser's samples missed bright paths the bootstrap or the large
+    /// steps found, its measurement is too small: the combination then follows the values and
+    /// is as uncertain as their own spread says, which the inverse-variance error of the two
+    /// weights would hide (a depth whose estimate is twice its true value reporting ± 3 %).
     pub fn normalisation(&self, large: &Moments) -> (f64, f64) {
         let mut plain = self.moments();
         plain.merge(large);
@@ -255,10 +261,11 @@ impl Bootstrap {
             mean += combined / folds.len() as f64;
         }
         let var_a = (a * rel_a).powi(2);
-        let per_sample = normaliser.target_variance().unwrap_or_else(|| per_sample_variance(&all_values));
-        let var_b = per_sample / plain.n.max(1) as f64;
-        let var = if var_a + var_b > 0.0 { var_a * var_b / (var_a + var_b) } else { 0.0 };
-        (mean, if mean > 0.0 { var.sqrt() / mean } else { 0.0 })
+        let n = plain.n.max(1) as f64;
+        // The values' variance as their weight took it, and as their own spread shows it.
+        let weighed = normaliser.target_variance().unwrap_or_else(|| per_sample_variance(&all_values)) / n;
+        let var_b = weighed.max(per_sample_variance(&plain) / n);
+        (mean, if mean > 0.0 { combined_variance(var_a, weighed, var_b).sqrt() / mean } else { 0.0 })
     }
 
     /// The moments of the bootstrap values whose index is `f` modulo `folds`.
@@ -339,6 +346,21 @@ pub fn large_step_acceptance(values: &[f32]) -> f64 {
 /// How many of a group's bootstrap values are non-zero ([`Bootstrap::nonzero`]).
 pub fn count_nonzero(values: &[f32]) -> u64 {
     values.iter().filter(|&&v| v > 0.0).count() as u64
+}
+
+/// The variance of the inverse-variance combination of two independent estimates weighted by
+/// the variances `var_a` and `weighed`, where the second one's variance is in fact `var_b`: a
+/// weight of zero variance takes its estimate alone.
+fn combined_variance(var_a: f64, weighed: f64, var_b: f64) -> f64 {
+    match (var_a > 0.0, weighed > 0.0) {
+        (true, true) => {
+            let (wa, wb) = (1.0 / var_a, 1.0 / weighed);
+            (wa * wa * var_a + wb * wb * var_b) / ((wa + wb) * (wa + wb))
+        }
+        (false, true) => var_a,
+        (true, false) => var_b,
+        (false, false) => 0.25 * (var_a + var_b),
+    }
 }
 
 /// The moments of the non-zero values among `values`.
@@ -478,6 +500,51 @@ mod tests {
         let (mean, rel) = measured.mean_and_rel_se();
         assert!((mean - truth).abs() < 4.0 * mean * rel, "measured variance: {mean} ± {} vs {truth}", mean * rel);
         assert!(se_measured < 0.8 * se_own, "squared errors: {se_measured} (measured) vs {se_own} (own)");
+    }
+
+    /// The reported error is honest where the values caught a spike the normaliser missed: on
+    /// the heavy-tailed values above, among 4000 independent bootstraps, the estimates above the
+    /// truth by more than 10 % (the values caught a spike) lie within two reported standard
+    /// errors of it in at least 90 % of runs. The inverse-variance error of the two weights
+    /// (the formula this replaced, computed alongside) covers under half of them: it takes the
+    /// values' variance from the normaliser, which saw no spike, and reports about ± 1 %.
+    #[test]
+    fn the_reported_error_covers_estimates_the_values_spike_drove_up() {
+        let mut rng = Pcg32::new(29, 7);
+        let (n, p, spike) = (4, 0.001, 200.0);
+        let truth = 1.0 + p * (spike - 1.0 / n as f64);
+        let (runs, n_values, n_large, n_normaliser) = (4000, 400, 1600, 96);
+        let (mut high, mut covered, mut covered_before) = (0, 0, 0);
+        for _ in 0..runs {
+            let values: Vec<f32> = (0..n_values).map(|_| path(&mut rng, n, p, spike).2 as f32).collect();
+            let large = moments(&(0..n_large).map(|_| path(&mut rng, n, p, spike).2).collect::<Vec<_>>());
+            let norm: Vec<(f64, f64, f64)> = (0..n_normaliser).map(|_| path(&mut rng, n, p, spike)).collect();
+            let folds: Vec<NormaliserMoments> = norm
+                .chunks(n_normaliser / FOLDS)
+                .map(|c| NormaliserMoments {
+                    moments: moments(&c.iter().map(|v| v.0).collect::<Vec<_>>()),
+                    one_sample_sum2: Some(c.iter().map(|v| v.1).sum()),
+                })
+                .collect();
+            let mut all = NormaliserMoments { one_sample_sum2: Some(0.0), ..Default::default() };
+            folds.iter().for_each(|f| all.merge(f));
+            let boot = bootstrap(values, folds);
+            let (b, rel) = boot.normalisation(&large);
+            if b <= 1.1 * truth {
+                continue;
+            }
+            high += 1;
+            covered += usize::from((b - truth).abs() <= 2.0 * b * rel);
+            let (a, rel_a) = all.moments.mean_and_rel_se();
+            let var_a = (a * rel_a).powi(2);
+            let var_b = all.target_variance().unwrap() / (n_values + n_large) as f64;
+            let before = (var_a * var_b / (var_a + var_b)).sqrt();
+            covered_before += usize::from((b - truth).abs() <= 2.0 * before);
+        }
+        assert!(high > 400, "{high} runs above the truth");
+        let share = |c: usize| c as f64 / high as f64;
+        assert!(share(covered) >= 0.9, "covered {covered} of {high}");
+        assert!(share(covered_before) < 0.5, "before: covered {covered_before} of {high}");
     }
 
     /// The estimated large-step acceptance matches closed forms: a target that is 1 on a
