@@ -36,7 +36,8 @@ pub struct IntegratorFlags {
     pub allocation: Option<Allocation>,
     /// MMLT and tempered MMLT: sample the depths whose bootstrap has fewer than N non-zero
     /// values independently (bidirectional path tracing restricted to the depth) instead of by
-    /// chains that would all start from those few states (0: never)
+    /// chains that would all start from those few states (MMLT's default 0: never; tempered
+    /// MMLT's 20)
     #[arg(long, value_name = "N")]
     pub independent_below: Option<usize>,
     /// MMLT and tempered MMLT: the share of the chains' rays spent on further samples of the

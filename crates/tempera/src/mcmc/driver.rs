@@ -266,12 +266,13 @@ impl ChainSettings {
 
     /// The walkers of every group with light: under a fixed budget each group's share of the
     /// mutations in proportion to its weight, and no more walkers than mutations.
-    /// A group whose bootstrap holds no light has no state to start from: it gets no walkers.
-    fn plan(&self, boots: &[Bootstrap], budget: Option<u64>) -> Vec<Slot> {
+    /// A group whose bootstrap holds no light has no state to start from: it gets no walkers,
+    /// unless it is sampled independently (`independent[k]`) and its normaliser saw light.
+    fn plan(&self, boots: &[Bootstrap], independent: &[bool], budget: Option<u64>) -> Vec<Slot> {
         let total: f64 = boots.iter().map(|b| self.weight(b)).sum();
         let mut plan = Vec::new();
         for (k, b) in boots.iter().enumerate() {
-            if b.mean <= 0.0 || b.b() <= 0.0 {
+            if b.b() <= 0.0 || (b.mean <= 0.0 && !independent[k]) {
                 continue;
             }
             let m_k = budget.map(|m| (self.weight(b) / total * m as f64).round() as u64);
@@ -314,7 +315,7 @@ impl ChainSettings {
         };
         let independent: Vec<bool> = (0..groups).map(|k| self.independent(&boots[k], &targets(k))).collect();
         let (iplan, plan): (Vec<Slot>, Vec<Slot>) =
-            self.plan(&boots, budget).into_iter().partition(|slot| independent[slot.group]);
+            self.plan(&boots, &independent, budget).into_iter().partition(|slot| independent[slot.group]);
         let mut independents: Vec<Independent> =
             iplan.iter().map(|slot| Independent::new(slot.group, seed, slot.index)).collect();
         // Every independent walker's samples cover all the independently sampled depths.
