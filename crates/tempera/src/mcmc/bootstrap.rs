@@ -463,6 +463,28 @@ mod tests {
         (y.iter().sum(), n as f64 * y.iter().map(|v| v * v).sum::<f64>(), n as f64 * y[pick])
     }
 
+    /// One bootstrap's worth of heavy-tailed samples (a spike that every thousandth path carries
+    /// in one of four strategies): 400 values, the moments of 1600 large steps, and 96
+    /// normaliser samples as [`path`] returns them; with the truth they estimate.
+    fn heavy_tailed(rng: &mut Pcg32) -> (Vec<f32>, Moments, Vec<(f64, f64, f64)>, f64) {
+        let (n, p, spike) = (4, 0.001, 200.0);
+        let values = (0..400).map(|_| path(rng, n, p, spike).2 as f32).collect();
+        let large = moments(&(0..1600).map(|_| path(rng, n, p, spike).2).collect::<Vec<_>>());
+        let norm = (0..96).map(|_| path(rng, n, p, spike)).collect();
+        (values, large, norm, 1.0 + p * (spike - 1.0 / n as f64))
+    }
+
+    /// The normaliser samples `norm` in [`FOLDS`] folds, with the target's variance measured
+    /// where `with_variance` is set.
+    fn folds(norm: &[(f64, f64, f64)], with_variance: bool) -> Vec<NormaliserMoments> {
+        norm.chunks(norm.len() / FOLDS)
+            .map(|c| NormaliserMoments {
+                moments: moments(&c.iter().map(|v| v.0).collect::<Vec<_>>()),
+                one_sample_sum2: with_variance.then(|| c.iter().map(|v| v.1).sum()),
+            })
+            .collect()
+    }
+
     /// Heavy-tailed one-strategy values (a spike that every thousandth path carries in one of
     /// four strategies): with the target's variance measured on the normaliser's samples the
     /// normalisation stays unbiased over 4000 independent bootstraps and has less than 0.8 of
@@ -471,28 +493,16 @@ mod tests {
     #[test]
     fn the_normalisers_measure_of_the_targets_variance_lowers_the_error() {
         let mut rng = Pcg32::new(23, 5);
-        let (n, p, spike) = (4, 0.001, 200.0);
-        let truth = 1.0 + p * (spike - 1.0 / n as f64);
-        let (runs, n_values, n_large, n_normaliser) = (4000, 400, 1600, 96);
         let (mut measured, mut own) = (Moments::default(), Moments::default());
-        let (mut se_measured, mut se_own) = (0.0, 0.0);
-        for _ in 0..runs {
-            let values: Vec<f32> = (0..n_values).map(|_| path(&mut rng, n, p, spike).2 as f32).collect();
-            let large = moments(&(0..n_large).map(|_| path(&mut rng, n, p, spike).2).collect::<Vec<_>>());
-            let norm: Vec<(f64, f64, f64)> = (0..n_normaliser).map(|_| path(&mut rng, n, p, spike)).collect();
-            let folds = |with_variance: bool| {
-                norm.chunks(n_normaliser / FOLDS)
-                    .map(|c| NormaliserMoments {
-                        moments: moments(&c.iter().map(|v| v.0).collect::<Vec<_>>()),
-                        one_sample_sum2: with_variance.then(|| c.iter().map(|v| v.1).sum()),
-                    })
-                    .collect()
-            };
-            let mut boot = bootstrap(values, folds(true));
+        let (mut se_measured, mut se_own, mut truth) = (0.0, 0.0, 0.0);
+        for _ in 0..4000 {
+            let (values, large, norm, t) = heavy_tailed(&mut rng);
+            truth = t;
+            let mut boot = bootstrap(values, folds(&norm, true));
             let b = boot.normalisation(&large).0;
             measured.push(b);
             se_measured += (b - truth).powi(2);
-            boot.normaliser = Some(folds(false));
+            boot.normaliser = Some(folds(&norm, false));
             let b = boot.normalisation(&large).0;
             own.push(b);
             se_own += (b - truth).powi(2);
@@ -507,28 +517,17 @@ mod tests {
     /// truth by more than 10 % (the values caught a spike) lie within two reported standard
     /// errors of it in at least 90 % of runs. The inverse-variance error of the two weights
     /// (the formula this replaced, computed alongside) covers under half of them: it takes the
-    /// values' variance from the normaliser, which saw no spike, and reports about ± 1 %.
+    /// values' variance from the normaliser, which saw no spike.
     #[test]
     fn the_reported_error_covers_estimates_the_values_spike_drove_up() {
         let mut rng = Pcg32::new(29, 7);
-        let (n, p, spike) = (4, 0.001, 200.0);
-        let truth = 1.0 + p * (spike - 1.0 / n as f64);
-        let (runs, n_values, n_large, n_normaliser) = (4000, 400, 1600, 96);
         let (mut high, mut covered, mut covered_before) = (0, 0, 0);
-        for _ in 0..runs {
-            let values: Vec<f32> = (0..n_values).map(|_| path(&mut rng, n, p, spike).2 as f32).collect();
-            let large = moments(&(0..n_large).map(|_| path(&mut rng, n, p, spike).2).collect::<Vec<_>>());
-            let norm: Vec<(f64, f64, f64)> = (0..n_normaliser).map(|_| path(&mut rng, n, p, spike)).collect();
-            let folds: Vec<NormaliserMoments> = norm
-                .chunks(n_normaliser / FOLDS)
-                .map(|c| NormaliserMoments {
-                    moments: moments(&c.iter().map(|v| v.0).collect::<Vec<_>>()),
-                    one_sample_sum2: Some(c.iter().map(|v| v.1).sum()),
-                })
-                .collect();
+        for _ in 0..4000 {
+            let (values, large, norm, truth) = heavy_tailed(&mut rng);
+            let measured = folds(&norm, true);
             let mut all = NormaliserMoments { one_sample_sum2: Some(0.0), ..Default::default() };
-            folds.iter().for_each(|f| all.merge(f));
-            let boot = bootstrap(values, folds);
+            measured.iter().for_each(|f| all.merge(f));
+            let boot = bootstrap(values, measured);
             let (b, rel) = boot.normalisation(&large);
             if b <= 1.1 * truth {
                 continue;
@@ -537,7 +536,7 @@ mod tests {
             covered += usize::from((b - truth).abs() <= 2.0 * b * rel);
             let (a, rel_a) = all.moments.mean_and_rel_se();
             let var_a = (a * rel_a).powi(2);
-            let var_b = all.target_variance().unwrap() / (n_values + n_large) as f64;
+            let var_b = all.target_variance().unwrap() / (large.n + 400) as f64;
             let before = (var_a * var_b / (var_a + var_b)).sqrt();
             covered_before += usize::from((b - truth).abs() <= 2.0 * before);
         }
