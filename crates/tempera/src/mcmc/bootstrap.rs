@@ -463,10 +463,13 @@ mod tests {
         (y.iter().sum(), n as f64 * y.iter().map(|v| v * v).sum::<f64>(), n as f64 * y[pick])
     }
 
+    /// A normaliser sample as [`path`] returns it.
+    type PathSample = (f64, f64, f64);
+
     /// One bootstrap's worth of heavy-tailed samples (a spike that every thousandth path carries
     /// in one of four strategies): 400 values, the moments of 1600 large steps, and 96
     /// normaliser samples as [`path`] returns them; with the truth they estimate.
-    fn heavy_tailed(rng: &mut Pcg32) -> (Vec<f32>, Moments, Vec<(f64, f64, f64)>, f64) {
+    fn heavy_tailed(rng: &mut Pcg32) -> (Vec<f32>, Moments, Vec<PathSample>, f64) {
         let (n, p, spike) = (4, 0.001, 200.0);
         let values = (0..400).map(|_| path(rng, n, p, spike).2 as f32).collect();
         let large = moments(&(0..1600).map(|_| path(rng, n, p, spike).2).collect::<Vec<_>>());
@@ -476,7 +479,7 @@ mod tests {
 
     /// The normaliser samples `norm` in [`FOLDS`] folds, with the target's variance measured
     /// where `with_variance` is set.
-    fn folds(norm: &[(f64, f64, f64)], with_variance: bool) -> Vec<NormaliserMoments> {
+    fn folds(norm: &[PathSample], with_variance: bool) -> Vec<NormaliserMoments> {
         norm.chunks(norm.len() / FOLDS)
             .map(|c| NormaliserMoments {
                 moments: moments(&c.iter().map(|v| v.0).collect::<Vec<_>>()),
