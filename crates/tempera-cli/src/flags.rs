@@ -37,7 +37,7 @@ pub struct IntegratorFlags {
     /// MMLT and tempered MMLT: sample the depths whose bootstrap has fewer than N non-zero
     /// values independently (bidirectional path tracing restricted to the depth) instead of by
     /// chains that would all start from those few states (MMLT's default 0: never; tempered
-    /// MMLT's 20)
+    /// MMLT's 40)
     #[arg(long, value_name = "N")]
     pub independent_below: Option<usize>,
     /// MMLT and tempered MMLT: the share of the chains' rays spent on further samples of the

@@ -159,9 +159,9 @@ impl TemperedIntegrator {
             measure_efficiency: false,
             bridge_above: Some(crate::mcmc::bridge::DEFAULT_ABOVE),
             depth_images: false,
-            // The depths whose bootstrap found fewer than 20 paths with light: measured against
-            // none and 40 (README, "Independent samples where the chains cannot start").
-            independent_below: 20,
+            // The depths whose bootstrap found fewer than 40 paths with light: measured against
+            // none and 20 (README, "Independent samples where the chains cannot start").
+            independent_below: 40,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
         }
     }
