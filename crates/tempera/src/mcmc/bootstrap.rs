@@ -455,7 +455,7 @@ mod tests {
     /// evenly, a rare one (probability `p`) carries a spike in one strategy. Returns the
     /// normaliser's estimate `Σ Y_s`, its `n Σ Y_s²`, and the one-strategy value `n·Y_S` of a
     /// strategy `S` picked uniformly (the target's own sample).
-    fn path(rng: &mut Pcg32, n: usize, p: f64, spike: f64) -> (f64, f64, f64) {
+    fn path(rng: &mut Pcg32, n: usize, p: f64, spike: f64) -> PathSample {
         let spiky = (rng.next_f64() < p).then(|| (rng.next_f64() * n as f64) as usize);
         let y: Vec<f64> =
             (0..n).map(|s| if spiky == Some(s) { spike } else { (0.8 + 0.4 * rng.next_f64()) / n as f64 }).collect();
@@ -466,15 +466,24 @@ mod tests {
     /// A normaliser sample as [`path`] returns it.
     type PathSample = (f64, f64, f64);
 
-    /// One bootstrap's worth of heavy-tailed samples (a spike that every thousandth path carries
-    /// in one of four strategies): 400 values, the moments of 1600 large steps, and 96
-    /// normaliser samples as [`path`] returns them; with the truth they estimate.
-    fn heavy_tailed(rng: &mut Pcg32) -> (Vec<f32>, Moments, Vec<PathSample>, f64) {
-        let (n, p, spike) = (4, 0.001, 200.0);
-        let values = (0..400).map(|_| path(rng, n, p, spike).2 as f32).collect();
-        let large = moments(&(0..1600).map(|_| path(rng, n, p, spike).2).collect::<Vec<_>>());
-        let norm = (0..96).map(|_| path(rng, n, p, spike)).collect();
-        (values, large, norm, 1.0 + p * (spike - 1.0 / n as f64))
+    /// The heavy-tailed model of the tests below: a spike of `SPIKE` that every thousandth path
+    /// carries in one of `STRATEGIES` strategies.
+    const STRATEGIES: usize = 4;
+    const SPIKE_PROBABILITY: f64 = 0.001;
+    const SPIKE: f64 = 200.0;
+    /// The normalisation the heavy-tailed samples estimate.
+    const HEAVY_TAILED_TRUTH: f64 = 1.0 + SPIKE_PROBABILITY * (SPIKE - 1.0 / STRATEGIES as f64);
+    /// The bootstrap values per heavy-tailed bootstrap.
+    const HEAVY_TAILED_VALUES: usize = 400;
+
+    /// One bootstrap's worth of heavy-tailed samples: [`HEAVY_TAILED_VALUES`] values, the
+    /// moments of 1600 large steps, and 96 normaliser samples as [`path`] returns them.
+    fn heavy_tailed(rng: &mut Pcg32) -> (Vec<f32>, Moments, Vec<PathSample>) {
+        let mut draw = || path(rng, STRATEGIES, SPIKE_PROBABILITY, SPIKE);
+        let values = (0..HEAVY_TAILED_VALUES).map(|_| draw().2 as f32).collect();
+        let large = moments(&(0..1600).map(|_| draw().2).collect::<Vec<_>>());
+        let norm = (0..96).map(|_| draw()).collect();
+        (values, large, norm)
     }
 
     /// The normaliser samples `norm` in [`FOLDS`] folds, with the target's variance measured
@@ -497,10 +506,9 @@ mod tests {
     fn the_normalisers_measure_of_the_targets_variance_lowers_the_error() {
         let mut rng = Pcg32::new(23, 5);
         let (mut measured, mut own) = (Moments::default(), Moments::default());
-        let (mut se_measured, mut se_own, mut truth) = (0.0, 0.0, 0.0);
+        let (mut se_measured, mut se_own, truth) = (0.0, 0.0, HEAVY_TAILED_TRUTH);
         for _ in 0..4000 {
-            let (values, large, norm, t) = heavy_tailed(&mut rng);
-            truth = t;
+            let (values, large, norm) = heavy_tailed(&mut rng);
             let mut boot = bootstrap(values, folds(&norm, true));
             let b = boot.normalisation(&large).0;
             measured.push(b);
@@ -525,8 +533,9 @@ mod tests {
     fn the_reported_error_covers_estimates_the_values_spike_drove_up() {
         let mut rng = Pcg32::new(29, 7);
         let (mut high, mut covered, mut covered_before) = (0, 0, 0);
+        let truth = HEAVY_TAILED_TRUTH;
         for _ in 0..4000 {
-            let (values, large, norm, truth) = heavy_tailed(&mut rng);
+            let (values, large, norm) = heavy_tailed(&mut rng);
             let measured = folds(&norm, true);
             let mut all = NormaliserMoments { one_sample_sum2: Some(0.0), ..Default::default() };
             measured.iter().for_each(|f| all.merge(f));
@@ -539,7 +548,7 @@ mod tests {
             covered += usize::from((b - truth).abs() <= 2.0 * b * rel);
             let (a, rel_a) = all.moments.mean_and_rel_se();
             let var_a = (a * rel_a).powi(2);
-            let var_b = all.target_variance().unwrap() / (large.n + 400) as f64;
+            let var_b = all.target_variance().unwrap() / (large.n + HEAVY_TAILED_VALUES as u64) as f64;
             let before = (var_a * var_b / (var_a + var_b)).sqrt();
             covered_before += usize::from((b - truth).abs() <= 2.0 * before);
         }
