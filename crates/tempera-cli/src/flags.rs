@@ -76,6 +76,13 @@ pub struct IntegratorFlags {
     /// error (`b_rel_se`) exceeds E and the bridge reports at most half of it (inf: never)
     #[arg(long, value_name = "E")]
     pub bridge_above: Option<f64>,
+    /// Tempered MMLT: render by bidirectional path tracing alone where the bootstrap's
+    /// independent acceptance (the large steps' acceptance at equilibrium over the depths
+    /// k ≥ 1, weighted by b_k; `independent_acceptance` in --stats) exceeds A: the scene's
+    /// light is found as well by independent samples, and BDPT wins (default 0.03; inf: never;
+    /// never with --hybrid, --depth-images or --measure-efficiency, which are the chains' own)
+    #[arg(long, value_name = "A")]
+    pub bdpt_above: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (default 2; 1 is plain MMLT).
     #[arg(long)]
     pub replicas: Option<usize>,
@@ -195,6 +202,7 @@ impl IntegratorFlags {
             hybrid_share: self.hybrid_share,
             measure_efficiency: self.measure_efficiency.then_some(true),
             bridge_above: self.bridge_above,
+            bdpt_above: self.bdpt_above,
             replicas: self.replicas,
             swap: self.swap,
             ladder: self.ladder.clone(),

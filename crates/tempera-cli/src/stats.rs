@@ -26,8 +26,13 @@ pub fn print_table(stats: &RunStats) {
             c.seconds, c.variance_ratio
         );
     }
-    // No chains ran (BDPT alone by the pilot's choice): nothing to tabulate.
-    if stats.depths.iter().all(|d| d.mutations == 0) {
+    let no_chains = stats.depths.iter().all(|d| d.mutations == 0);
+    if let Some(a) = stats.depths.first().and_then(|d| d.independent_acceptance) {
+        let chose = if no_chains { "BDPT alone" } else { "the chains" };
+        eprintln!("bootstrap: independent acceptance {a:.4} (--bdpt-above): {chose}");
+    }
+    // No chains ran (BDPT alone by the pilot's or the bootstrap's choice): nothing to tabulate.
+    if no_chains {
         return;
     }
     let tempered = stats.depths.iter().any(|d| d.swaps.is_some());

@@ -281,6 +281,8 @@ fn tempered_renders_with_every_swap_strategy_and_reports_swaps() {
             .current_dir(&dir)
             .args(["render", "--integrator", "tempered", "--mpp", "2", "--bootstrap", "2000", "--maxdepth", "3"])
             .args([
+                "--bdpt-above",
+                "inf",
                 "--ensembles-below",
                 "0",
                 "--resolution",

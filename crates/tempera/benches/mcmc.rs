@@ -47,8 +47,14 @@ fn pssmlt_mutations(bencher: Bencher, threads: usize) {
 fn tempered_mutations(bencher: Bencher, threads: usize) {
     LazyLock::force(&SCENE);
     let ladder = TemperedIntegrator::default_ladder(5);
-    let m =
-        TemperedIntegrator { bootstrap: 1000, replicas: 5, ladder, ensembles_below: 0, ..TemperedIntegrator::new(8) };
+    let m = TemperedIntegrator {
+        bootstrap: 1000,
+        replicas: 5,
+        ladder,
+        ensembles_below: 0,
+        bdpt_above: None,
+        ..TemperedIntegrator::new(8)
+    };
     bencher.counter(ItemsCount::new((SIZE * SIZE * MPP) as usize)).bench(|| render(&m, threads));
 }
 

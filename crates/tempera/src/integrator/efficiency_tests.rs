@@ -46,6 +46,7 @@ fn measuring_keeps_the_image_at_any_thread_count() {
         reuse_replicas: false,
         measure_efficiency: true,
         ensembles_below: 0,
+        bdpt_above: None,
         ..TemperedIntegrator::new(4)
     };
     let reference = render_with(&scene, &plain, Budget::Samples(16), 9, 1);

@@ -48,8 +48,13 @@ fn depth_images_sum_to_the_image_and_agree_with_bdpts_strategies_per_depth() {
     let scene = crate::scenes::cornell_box(16, 16).build().unwrap();
     let per_depth = bdpt_totals_per_depth(&scene);
     let mmlt = MmltIntegrator { bootstrap: 50_000, chains: 16, ..MmltIntegrator::new(3) };
-    let tempered =
-        TemperedIntegrator { bootstrap: 50_000, chains: 16, ensembles_below: 0, ..TemperedIntegrator::new(3) };
+    let tempered = TemperedIntegrator {
+        bootstrap: 50_000,
+        chains: 16,
+        ensembles_below: 0,
+        bdpt_above: None,
+        ..TemperedIntegrator::new(3)
+    };
     let cases: [(&dyn Integrator, &dyn Integrator); 2] = [
         (&mmlt, &MmltIntegrator { depth_images: true, ..mmlt }),
         (&tempered, &TemperedIntegrator { depth_images: true, ..tempered.clone() }),
@@ -95,6 +100,7 @@ fn independently_sampled_depths_agree_with_bdpt_per_depth() {
         independent_below: 1_000_000,
         depth_images: true,
         ensembles_below: 0,
+        bdpt_above: None,
         ..TemperedIntegrator::new(3)
     };
     for integrator in [&mmlt as &dyn Integrator, &tempered] {

@@ -263,6 +263,7 @@ fn the_bridge_estimate_agrees_with_b_where_the_chains_mix() {
         tuning: LadderTuning::BurnIn,
         burn_in: 50,
         ensembles_below: 0,
+        bdpt_above: None,
         ..TemperedIntegrator::new(4)
     };
     for out in
@@ -300,6 +301,7 @@ fn the_ladder_estimate_agrees_with_b_down_a_roughened_ladder() {
         bootstrap: 50_000,
         ladder: vec![0.3, 1.0],
         ensembles_below: 0,
+        bdpt_above: None,
         ..TemperedIntegrator::new(4)
     };
     let out = tempered.render(&scene, &settings, &control).unwrap();

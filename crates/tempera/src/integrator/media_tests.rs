@@ -164,7 +164,7 @@ fn markov_chain_integrators_agree_with_bdpt_in_a_scattering_medium() {
     for integrator in [
         &MmltIntegrator { bootstrap: 100_000, ..MmltIntegrator::new(6) } as &dyn Integrator,
         &PssmltIntegrator::new(6),
-        &TemperedIntegrator { ensembles_below: 0, ..TemperedIntegrator::new(6) },
+        &TemperedIntegrator { ensembles_below: 0, bdpt_above: None, ..TemperedIntegrator::new(6) },
     ] {
         let out = render_with(&scene, integrator, Budget::Samples(1024), 22, 0);
         let name = integrator.name();

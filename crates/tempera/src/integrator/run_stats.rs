@@ -130,6 +130,10 @@ pub struct DepthRecord {
     /// What the pilot of `--hybrid auto` measured and chose (depth 0's row only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hybrid_pilot: Option<super::hybrid_pilot::HybridChoice>,
+    /// Tempered MMLT's bootstrap-weighted independent acceptance, by which it chose between
+    /// its chains and BDPT alone (`--bdpt-above`; depth 0's row only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub independent_acceptance: Option<f64>,
     /// How unevenly the depth's light is spread over its paths: `sqrt(E[f²]/E[f]²)` over the
     /// bootstrap's non-zero values, capped at 8 (mutations may be allotted by `b` times it).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -235,6 +239,7 @@ impl DepthRecord {
             hybrid_samples: d.hybrid_samples,
             measured_efficiency: d.measured_efficiency,
             hybrid_pilot: d.hybrid_choice,
+            independent_acceptance: d.independent_acceptance,
             spread: d.spread,
             mutations: d.mutations,
             acceptance: Acceptance {

@@ -241,6 +241,11 @@ pub struct IntegratorSettings {
     /// ([`crate::mcmc::bridge::prefer`]; infinity: never).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bridge_above: Option<f64>,
+    /// Tempered MMLT: render by bidirectional path tracing alone where the bootstrap's
+    /// independent acceptance ([`crate::mcmc::bootstrap::independent_acceptance`]) exceeds this
+    /// (default [`crate::integrator::tempered::DEFAULT_BDPT_ABOVE`]; infinity: never).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bdpt_above: Option<f64>,
     /// Tempered MMLT: replicas per ensemble (1 is plain MMLT).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicas: Option<usize>,
@@ -365,6 +370,7 @@ impl IntegratorSettings {
             ("hybrid_share", self.hybrid_share.is_some(), kind == Mmlt || tempered),
             ("measure_efficiency", self.measure_efficiency.is_some(), kind == Mmlt || tempered),
             ("bridge_above", self.bridge_above.is_some(), kind == Mmlt || tempered),
+            ("bdpt_above", self.bdpt_above.is_some(), tempered),
             ("replicas", self.replicas.is_some(), tempered),
             ("swap", self.swap.is_some(), tempered),
             ("ladder", self.ladder.is_some(), tempered),
@@ -413,6 +419,7 @@ impl IntegratorSettings {
                 ("pilot", self.pilot.is_some()),
                 ("ensembles_below", self.ensembles_below.is_some()),
                 ("swap_target", self.swap_target.is_some()),
+                ("bdpt_above", self.bdpt_above.is_some()),
             ];
             if let Some((name, _)) = fixed.iter().find(|f| f.1) {
                 return Err(format!("the paper's setup fixes {name}; give one or the other"));
@@ -435,6 +442,7 @@ impl IntegratorSettings {
         check_probability("collapse_below", self.collapse_below)?;
         check_range("normaliser_share", self.normaliser_share, 0.0..=1.0)?;
         check_range("bridge_above", self.bridge_above, 0.0..=f64::INFINITY)?;
+        check_range("bdpt_above", self.bdpt_above, 0.0..=f64::INFINITY)?;
         if self.hybrid.is_some_and(|r| !(0.0..=100.0).contains(&r.ratio())) {
             return Err("hybrid must be between 0 and 100 samples per mutation".into());
         }

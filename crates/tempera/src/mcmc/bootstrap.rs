@@ -312,6 +312,28 @@ impl Bootstrap {
     }
 }
 
+/// How well independent samples would do where MMLT's chains run: over the path depths
+/// `k ≥ 1` (`boots[k]`, one per depth from 0), each depth's [`Bootstrap::large_step_acceptance`]
+/// weighted by its normalisation `b_k`, so the acceptance a chain's large steps would have at
+/// equilibrium, averaged over the light the chains carry. Depth 0 (emitters seen directly) is
+/// left out: a chain finds its light as easily as a camera ray does. An acceptance near one
+/// says uniform samples land about as often on the light as the chains' states do, so the
+/// chains' local moves have little to find that independent samples miss (Kelemen et al.
+/// 2002 read the large steps' acceptance so); an acceptance near zero says the light lies in
+/// small regions of primary sample space that only chains keep finding. 0 where no depth
+/// `k ≥ 1` has light.
+pub fn independent_acceptance(boots: &[Bootstrap]) -> f64 {
+    let (mut weighted, mut total) = (0.0, 0.0);
+    for boot in boots.iter().skip(1) {
+        let b = boot.b();
+        if b.is_finite() && b > 0.0 {
+            weighted += b * boot.large_step_acceptance();
+            total += b;
+        }
+    }
+    if total > 0.0 { weighted / total } else { 0.0 }
+}
+
 /// The value a target whose bootstrap drew `values` is clamped at: `factor` times the mean of
 /// the non-zero values (infinite where there are none). The mean of the non-zero values, not of
 /// all: a target that is zero on most of primary sample space (a small light seen directly)
@@ -577,5 +599,37 @@ mod tests {
         let mut spiked = uniform.clone();
         spiked[0] = 1e6;
         assert!(large_step_acceptance(&spiked) < 0.05, "{}", large_step_acceptance(&spiked));
+    }
+
+    /// Depths `k ≥ 1` count by their `b_k`, depth 0 not at all: a depth of equal values
+    /// (acceptance 1, `b` = 1) beside one whose light is a single value of a thousand
+    /// (acceptance 0, `b` = 1, then 3), with a depth 0 of equal values and a large `b`.
+    #[test]
+    fn independent_acceptance_weighs_the_depths_by_b() {
+        let plain = |values: Vec<f32>| {
+            let all = moments(&values.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
+            Bootstrap {
+                mean: all.sum / all.n as f64,
+                sum2: all.sum2,
+                values,
+                invalid: 0,
+                rays: 0,
+                normaliser_rays: 0,
+                normaliser: None,
+                clamp: f32::INFINITY,
+            }
+        };
+        let spike = |v: f32| {
+            let mut values = vec![0.0; 1000];
+            values[500] = v;
+            plain(values)
+        };
+        let seen_directly = || plain(vec![50.0; 1000]);
+        let flat = || plain(vec![1.0; 1000]);
+        let a = independent_acceptance(&[seen_directly(), flat(), spike(1000.0)]);
+        assert!((a - 0.5).abs() < 1e-9, "{a}");
+        let a = independent_acceptance(&[seen_directly(), flat(), spike(3000.0)]);
+        assert!((a - 0.25).abs() < 1e-9, "{a}");
+        assert_eq!(independent_acceptance(&[seen_directly(), plain(vec![0.0; 1000])]), 0.0);
     }
 }

@@ -82,6 +82,13 @@ pub struct ChainSettings {
     pub bridge_above: Option<f64>,
 }
 
+/// Every group's bootstrap, made before the render ([`ChainSettings::bootstrap_groups`]),
+/// and the rays it traced.
+pub struct Bootstraps {
+    pub boots: Vec<Bootstrap>,
+    pub rays: u64,
+}
+
 /// One walker's place in the render.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Slot {
@@ -226,7 +233,46 @@ impl ChainSettings {
         W: Walker,
     {
         let render = RenderLoop::new(settings, control);
-        render.install(|| self.render_in_pool(&render, scene, settings, groups, &targets, &start_walker))
+        render.install(|| self.render_in_pool(&render, scene, settings, groups, &targets, &start_walker, None))
+    }
+
+    /// Bootstraps every group as [`Self::render`] does (the same samples, so the same values),
+    /// on the render's threads, for a caller that decides from them how to render; an error
+    /// when no light path reaches the camera.
+    pub fn bootstrap_groups<T: Target + Sync>(
+        &self,
+        settings: &RenderSettings,
+        control: &RenderControl,
+        groups: usize,
+        targets: impl Fn(usize) -> T + Sync,
+    ) -> Result<Bootstraps, String> {
+        let render = RenderLoop::new(settings, control);
+        render
+            .install(|| self.bootstrap(settings.seed, groups, &targets))
+            .map(|(boots, rays)| Bootstraps { boots, rays })
+    }
+
+    /// [`Self::render`] from the bootstraps [`Self::bootstrap_groups`] made under the same
+    /// seed and targets: the same image, without bootstrapping again.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_bootstrapped<T, W>(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+        groups: usize,
+        targets: impl Fn(usize) -> T + Sync,
+        start_walker: impl Fn(StartContext) -> W + Sync,
+        bootstraps: Bootstraps,
+    ) -> Result<RenderOutput, String>
+    where
+        T: Target + Sync,
+        W: Walker,
+    {
+        let render = RenderLoop::new(settings, control);
+        render.install(|| {
+            self.render_in_pool(&render, scene, settings, groups, &targets, &start_walker, Some(bootstraps))
+        })
     }
 
     /// Bootstraps every group; an error when all of them saw no light.
@@ -287,6 +333,7 @@ impl ChainSettings {
         plan
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn render_in_pool<T, W>(
         &self,
         render: &RenderLoop,
@@ -295,6 +342,7 @@ impl ChainSettings {
         groups: usize,
         targets: &(impl Fn(usize) -> T + Sync),
         start_walker: &(impl Fn(StartContext) -> W + Sync),
+        bootstraps: Option<Bootstraps>,
     ) -> Result<RenderOutput, String>
     where
         T: Target + Sync,
@@ -304,7 +352,10 @@ impl ChainSettings {
         let (w, h) = (scene.film.width, scene.film.height);
         let pixels = u64::from(w) * u64::from(h);
         let started = std::time::Instant::now();
-        let (mut boots, mut total_rays) = self.bootstrap(seed, groups, targets)?;
+        let (mut boots, mut total_rays) = match bootstraps {
+            Some(Bootstraps { boots, rays }) => (boots, rays),
+            None => self.bootstrap(seed, groups, targets)?,
+        };
         let total: f64 = boots.iter().map(|b| self.weight(b)).sum();
         let shares: Vec<f64> = boots.iter().map(|b| self.weight(b) / total).collect();
         let share = |k: usize| shares[k];

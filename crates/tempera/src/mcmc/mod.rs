@@ -25,7 +25,7 @@ pub mod walker;
 pub use bootstrap::{Bootstrap, sampler_for, shared_bootstrap_bytes};
 pub use bridge::LadderBridge;
 pub use chain::{Chain, EvalContext, GroupValue, State, Target, target_value};
-pub use driver::ChainSettings;
+pub use driver::{Bootstraps, ChainSettings};
 pub use full::{FullContribution, evaluate_full};
 pub use stats::{DepthStats, Moments, NormaliserMoments, SwapStats};
 pub use strategy::{Contribution, Evaluated, evaluate, evaluate_connection, evaluate_depths, valid_radiance};

@@ -65,6 +65,9 @@ pub struct DepthStats {
     /// What the pilot of `--hybrid auto` measured and chose
     /// ([`crate::integrator::hybrid_pilot`]), in depth 0's row.
     pub hybrid_choice: Option<crate::integrator::hybrid_pilot::HybridChoice>,
+    /// The bootstrap's independent acceptance ([`super::bootstrap::independent_acceptance`])
+    /// where tempered MMLT chose between its chains and BDPT by it, in depth 0's row.
+    pub independent_acceptance: Option<f64>,
     /// The sums of the bridge estimate of `b` ([`super::bridge`]) over the group's main chains.
     pub bridge: BridgeSums,
     /// `b` as the bridge estimate gives it from the bootstrap, the large steps and the chains'

@@ -90,6 +90,7 @@ pub fn create(
                 sample_share: s.hybrid_share.or(m.sample_share),
                 measure_efficiency: s.measure_efficiency.unwrap_or(m.measure_efficiency),
                 bridge_above: s.bridge_above.or(m.bridge_above),
+                bdpt_above: s.bdpt_above.or(m.bdpt_above),
                 depth_images: s.depth_images,
                 ..m
             })

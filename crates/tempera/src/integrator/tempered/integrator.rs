@@ -2,7 +2,10 @@
 //! determinism) with one replica ensemble per chain at the depths `k ≥ 1` that keep ensembles
 //! ([`TemperedIntegrator::ensembles_below`]; 0: every depth `k ≥ 1`). Depth 0, whose only
 //! strategy has no connection vertex, and the other depths run MMLT's chains
-//! ([`super::walker`]).
+//! ([`super::walker`]). Before any chain runs, the bootstrap's independent acceptance
+//! ([`independent_acceptance`]) decides whether chains can pay on the scene at all
+//! ([`TemperedIntegrator::bdpt_above`]): where uniform samples land on the light about as
+//! often as a chain's states would, the render is bidirectional path tracing alone.
 
 use super::walker::TemperedWalker;
 use super::{
@@ -10,11 +13,14 @@ use super::{
 };
 use crate::bidir::{Heuristic, Tempering};
 use crate::integrator::mmlt::DepthTarget;
-use crate::integrator::{Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap};
+use crate::integrator::{
+    BdptIntegrator, Budget, Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap,
+};
 use crate::math::rng::{Pcg32, hash};
-use crate::mcmc::bootstrap::count_nonzero;
-use crate::mcmc::{ChainSettings, Flattening, Single, StartContext, TemperedTarget};
+use crate::mcmc::bootstrap::{count_nonzero, independent_acceptance};
+use crate::mcmc::{Bootstraps, ChainSettings, Flattening, Single, StartContext, TemperedTarget};
 use crate::scene::Scene;
+use std::time::{Duration, Instant};
 
 /// Rings of the equi-energy strategy.
 const RINGS: usize = 8;
@@ -114,7 +120,19 @@ pub struct TemperedIntegrator {
     /// The share of the chains' rays spent on further samples of the depths' normalisers as
     /// the render goes on ([`crate::mcmc::normaliser`]; 0: the bootstrap's alone).
     pub normaliser_share: f64,
+    /// Render by bidirectional path tracing alone where the bootstrap's
+    /// [`independent_acceptance`] exceeds this: the scene's light is found as well by
+    /// independent samples as by chains, and BDPT, which values every strategy of every depth
+    /// of each sample, then wins at equal time (`None`: never; nor with `hybrid`, per-depth
+    /// images or the chains' efficiency measured, which are the chains' own).
+    pub bdpt_above: Option<f64>,
 }
+
+/// [`TemperedIntegrator::bdpt_above`]'s default: between the scenes where the chains were
+/// measured to win (the bootstrap's independent acceptance 0.007–0.010 on the twin caustics
+/// and veach-ajar) and those where BDPT did (0.04 on the glossy lamp, 0.09 on coffee, 0.15 on
+/// the default scene), README "Where the chains cannot pay".
+pub const DEFAULT_BDPT_ABOVE: f64 = 0.03;
 
 impl TemperedIntegrator {
     pub fn new(max_depth: u32) -> Self {
@@ -163,6 +181,7 @@ impl TemperedIntegrator {
             // none and 20 (README, "Independent samples where the chains cannot start").
             independent_below: 40,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
+            bdpt_above: Some(DEFAULT_BDPT_ABOVE),
         }
     }
 
@@ -187,6 +206,7 @@ impl TemperedIntegrator {
             independent_below: 0,
             normaliser_share: 0.0,
             bridge_above: None,
+            bdpt_above: None,
             hybrid: 0.0,
             ..Self::new(max_depth)
         }
@@ -330,21 +350,42 @@ impl Integrator for TemperedIntegrator {
         }
         let bytes = self.memory_estimate(scene, settings.threads);
         control.check_memory(bytes, "a splat buffer per path depth and contributing replica")?;
-        let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
-            .with_spread_allocation(self.spread_allocation)
-            .with_spread_below(if self.spread_only_sparse { self.ensembles_below } else { 0 })
-            .with_group_images(self.depth_images)
-            .with_independent_below(self.independent_below)
-            .with_normaliser_share(self.normaliser_share)
-            .with_hybrid(self.hybrid)
-            .with_chain_efficiency(self.chain_efficiency)
-            .with_sample_share(self.sample_share)
-            .with_measured_efficiency(self.measure_efficiency)
-            .with_bridge_above(self.bridge_above);
+        let chains = self.chain_settings();
         let ladder = self.ladder();
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
-        chains.render(scene, settings, control, depths, main, |cx| self.start_walker(scene, &ladder, cx))
+        let start = |cx: StartContext| self.start_walker(scene, &ladder, cx);
+        // Per-depth images and the chains' measured efficiency are the chains' own.
+        let choose = self.hybrid == 0.0 && !self.depth_images && !self.measure_efficiency;
+        let Some(above) = self.bdpt_above.filter(|_| choose) else {
+            return chains.render(scene, settings, control, depths, main, start);
+        };
+        // The bootstrap first, to choose by; the render then gets the rest of a time budget
+        // (its snapshots as much earlier), and the chains reuse the bootstrap.
+        let started = Instant::now();
+        let bootstraps = chains.bootstrap_groups(settings, control, depths, main)?;
+        let acceptance = independent_acceptance(&bootstraps.boots);
+        let spent = started.elapsed();
+        let snapshots: Vec<Duration> = control.snapshots.iter().map(|t| t.saturating_sub(spent)).collect();
+        let control = RenderControl { snapshots: &snapshots, ..*control };
+        let budget = match settings.budget {
+            Budget::Time(t) => Budget::Time(t.saturating_sub(spent)),
+            fixed => fixed,
+        };
+        let rest = RenderSettings { budget, ..*settings };
+        let bootstrap_rays = bootstraps.rays;
+        let mut out = if acceptance > above {
+            let mut out = self.render_bdpt(scene, &rest, &control, &bootstraps)?;
+            out.stats.rays += bootstrap_rays;
+            out
+        } else {
+            chains.render_bootstrapped(scene, &rest, &control, depths, main, start, bootstraps)?
+        };
+        out.stats.seconds += spent.as_secs_f64();
+        if let Some(first) = out.chains.first_mut() {
+            first.independent_acceptance = Some(acceptance);
+        }
+        Ok(out)
     }
 
     fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {
@@ -359,4 +400,71 @@ impl Integrator for TemperedIntegrator {
             .saturating_mul(12 + images + (halves * depths * layers + hybrid) * SHARED_SPLAT_BYTES)
             .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
     }
+}
+
+impl TemperedIntegrator {
+    /// The chains' driver settings.
+    fn chain_settings(&self) -> ChainSettings {
+        ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
+            .with_spread_allocation(self.spread_allocation)
+            .with_spread_below(if self.spread_only_sparse { self.ensembles_below } else { 0 })
+            .with_group_images(self.depth_images)
+            .with_independent_below(self.independent_below)
+            .with_normaliser_share(self.normaliser_share)
+            .with_hybrid(self.hybrid)
+            .with_chain_efficiency(self.chain_efficiency)
+            .with_sample_share(self.sample_share)
+            .with_measured_efficiency(self.measure_efficiency)
+            .with_bridge_above(self.bridge_above)
+    }
+
+    /// BDPT alone, for the budget that was the chains'. A fixed budget of `m` mutations per
+    /// pixel becomes the samples per pixel that trace the rays `m` mutations would: a
+    /// mutation of depth `k` traces what depth `k`'s bootstrap evaluations traced on average,
+    /// the depths in the shares of `b_k` the chains would make, and a BDPT sample what a
+    /// one-sample-per-pixel render of it traces (a pilot whose image is not kept). So the
+    /// choice changes neither the work nor, at a fixed budget, the image's independence of
+    /// the machine and the thread count.
+    fn render_bdpt(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+        bootstraps: &Bootstraps,
+    ) -> Result<RenderOutput, String> {
+        let bdpt = BdptIntegrator::new(self.max_depth);
+        let budget = match settings.budget {
+            Budget::Samples(mpp) => {
+                // Every rank measures the same sample alone, so all choose the same budget.
+                let quiet = |_: u64| {};
+                let solo = &crate::cluster::SOLO;
+                let pilot_control = RenderControl { on_progress: &quiet, snapshots: &[], cluster: solo, ..*control };
+                let pilot =
+                    bdpt.render(scene, &RenderSettings { budget: Budget::Samples(1), ..*settings }, &pilot_control)?;
+                let pixels = f64::from(scene.film.width) * f64::from(scene.film.height);
+                let per_sample = pilot.stats.rays as f64 / pixels;
+                let spp = f64::from(mpp) * rays_per_mutation(&bootstraps.boots) / per_sample.max(1.0);
+                Budget::Samples(spp.round().clamp(1.0, f64::from(u32::MAX)) as u32)
+            }
+            time => time,
+        };
+        let mut out = bdpt.render(scene, &RenderSettings { budget, ..*settings }, control)?;
+        // BDPT has no chains: the choice gets a row of its own.
+        out.chains = vec![crate::mcmc::DepthStats::default()];
+        Ok(out)
+    }
+}
+
+/// The rays a mutation traces on average: each depth's bootstrap evaluations' rays per
+/// sample (its normaliser's left out), weighted by the depth's `b_k`.
+fn rays_per_mutation(boots: &[crate::mcmc::bootstrap::Bootstrap]) -> f64 {
+    let (mut rays, mut total) = (0.0, 0.0);
+    for boot in boots {
+        let b = boot.b();
+        if b.is_finite() && b > 0.0 && !boot.values.is_empty() {
+            rays += b * boot.rays.saturating_sub(boot.normaliser_rays) as f64 / boot.values.len() as f64;
+            total += b;
+        }
+    }
+    if total > 0.0 { rays / total } else { 1.0 }
 }

@@ -34,7 +34,7 @@ mod tests;
 
 pub use ensemble::{Ensemble, EnsembleGroup, EnsembleSettings};
 pub use equi_energy::EquiEnergy;
-pub use integrator::TemperedIntegrator;
+pub use integrator::{DEFAULT_BDPT_ABOVE, TemperedIntegrator};
 pub use ladder::{Ladder, Tuning, TuningMethod};
 pub use neighbor::Neighbor;
 pub use permutation::Permutation;

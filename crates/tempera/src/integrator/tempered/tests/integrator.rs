@@ -33,6 +33,7 @@ fn one_replica_reproduces_mmlt_exactly() {
             spread_allocation,
             independent_below,
             ensembles_below: 0,
+            bdpt_above: None,
             ..TemperedIntegrator::new(5)
         };
         let a = mmlt.render(&scene, &settings(16, 3, 0), &control).unwrap();
@@ -61,6 +62,7 @@ fn every_swap_strategy_agrees_with_bdpt_on_a_cornell_box_and_the_furnace() {
             swap,
             reuse_replicas: false,
             ensembles_below: 0,
+            bdpt_above: None,
             ..TemperedIntegrator::new(5)
         };
         let out = t.render(&cornell, &settings(512, 2, 0), &control).unwrap();
@@ -110,7 +112,13 @@ fn hot_replicas_and_collapsed_depths_agree_with_bdpt() {
     let (scene, bdpt) = default_scene_and_bdpt();
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
-    let base = TemperedIntegrator { bootstrap: 50_000, chains: 16, ensembles_below: 0, ..TemperedIntegrator::new(5) };
+    let base = TemperedIntegrator {
+        bootstrap: 50_000,
+        chains: 16,
+        ensembles_below: 0,
+        bdpt_above: None,
+        ..TemperedIntegrator::new(5)
+    };
     let hot = TemperedIntegrator { ladder: vec![0.3, 1.0, 8.0], replicas: 4, ..base.clone() };
     let collapsed = TemperedIntegrator { collapse_above: Some(0.01), max_temperature: 50.0, ..base.clone() };
     let lazy = TemperedIntegrator { hot_every: 4, ..base.clone() };
@@ -182,6 +190,7 @@ fn every_swap_strategy_agrees_with_bdpt_and_is_deterministic() {
             replicas: 4,
             swap,
             ensembles_below: 0,
+            bdpt_above: None,
             ..TemperedIntegrator::new(5)
         };
         let out = t.render(&scene, &settings(256, 2, 0), &control).unwrap();
@@ -196,6 +205,7 @@ fn every_swap_strategy_agrees_with_bdpt_and_is_deterministic() {
             replicas: 3,
             swap,
             ensembles_below: 0,
+            bdpt_above: None,
             ..TemperedIntegrator::new(4)
         };
         let run = |threads| small.render(&scene, &settings(4, 7, threads), &control).unwrap().image.pixels;
@@ -221,6 +231,7 @@ fn the_pilot_collapses_depths_whose_ensembles_do_not_pay() {
         swap_every: 1_000_000_000,
         pilot: 256,
         ensembles_below: 0,
+        bdpt_above: None,
         ..TemperedIntegrator::new(5)
     };
     let out = t.render(&cornell, &settings(512, 2, 0), &control).unwrap();
@@ -252,6 +263,7 @@ fn ensembles_only_where_the_bootstrap_is_sparse() {
         chains: 16,
         replicas: 2,
         ensembles_below: 0,
+        bdpt_above: None,
         ..TemperedIntegrator::new(5)
     };
     for spread in [true, false] {
@@ -263,7 +275,7 @@ fn ensembles_only_where_the_bootstrap_is_sparse() {
     // With its defaults tempered MMLT renders a scene without sparse depths as MMLT does.
     let a = mmlt.render(&scene, &settings(4, 3, 0), &control).unwrap();
     assert!(a.chains.iter().all(|d| d.depth == 0 || d.bootstrap_nonzero >= 128), "no sparse depth");
-    let defaults = TemperedIntegrator { bootstrap: 20_000, chains: 16, ..TemperedIntegrator::new(5) };
+    let defaults = TemperedIntegrator { bootstrap: 20_000, chains: 16, bdpt_above: None, ..TemperedIntegrator::new(5) };
     let b = defaults.render(&scene, &settings(4, 3, 0), &control).unwrap();
     assert!(a.image.pixels == b.image.pixels, "the defaults are MMLT's where no depth is sparse");
     // A threshold between the depths' counts of non-zero bootstrap values.
@@ -300,6 +312,7 @@ fn swap_steps_follow_the_swap_interval() {
             replicas: 3,
             swap_every: every,
             ensembles_below: 0,
+            bdpt_above: None,
             ..TemperedIntegrator::new(4)
         };
         let out = t.render(&scene, &settings(32, 1, 0), &control).unwrap();
@@ -309,4 +322,39 @@ fn swap_steps_follow_the_swap_interval() {
             assert!(steps * every <= d.mutations && steps * every + 8 * every > d.mutations, "every {every}: {d:?}");
         }
     }
+}
+
+/// `bdpt_above`: on the default scene (light found by independent samples about as often as
+/// by chains: independent acceptance above the default threshold) tempered MMLT with its
+/// defaults renders by BDPT alone, exactly BDPT's image at the samples per pixel it chose,
+/// fewer than the mutations per pixel asked for (a BDPT sample traces more rays than a
+/// mutation); on the glossy corner (light on narrow highlights) it runs its chains, exactly
+/// as without the choice, and says which in depth 0's row.
+#[test]
+fn bdpt_alone_where_the_bootstrap_says_the_chains_cannot_pay() {
+    let mut scene = crate::scenes::default_scene().build().unwrap();
+    scene.set_resolution(24, 24);
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl::new(&cancel, &|_| {});
+    let t = TemperedIntegrator { bootstrap: 20_000, chains: 16, ..TemperedIntegrator::new(5) };
+    let out = t.render(&scene, &settings(64, 3, 0), &control).unwrap();
+    let a = out.chains[0].independent_acceptance.expect("the choice is reported");
+    assert!(a > crate::integrator::tempered::DEFAULT_BDPT_ABOVE, "{a}");
+    assert!(out.chains.iter().all(|d| d.mutations == 0), "no chains ran");
+    let spp = out.stats.spp_completed;
+    assert!((1..64).contains(&spp), "{spp} samples per pixel");
+    let bdpt = BdptIntegrator::new(5).render(&scene, &settings(spp, 3, 0), &control).unwrap();
+    assert!(out.image.pixels == bdpt.image.pixels, "BDPT's image");
+    let again = t.render(&scene, &settings(64, 3, 1), &control).unwrap();
+    assert!(again.image.pixels == out.image.pixels, "the same image at any thread count");
+
+    let glossy = super::tuning::glossy_corner(0.02);
+    let t = TemperedIntegrator { bootstrap: 20_000, chains: 8, ..TemperedIntegrator::new(3) };
+    let chosen = t.render(&glossy, &settings(16, 3, 0), &control).unwrap();
+    let a = chosen.chains[0].independent_acceptance.expect("the choice is reported");
+    assert!(a < crate::integrator::tempered::DEFAULT_BDPT_ABOVE, "{a}");
+    assert!(chosen.chains.iter().any(|d| d.mutations > 0), "the chains ran");
+    let never = TemperedIntegrator { bdpt_above: None, ..t }.render(&glossy, &settings(16, 3, 0), &control).unwrap();
+    assert!(chosen.image.pixels == never.image.pixels, "the chains' image, bootstrapped once");
+    assert!(never.chains[0].independent_acceptance.is_none());
 }

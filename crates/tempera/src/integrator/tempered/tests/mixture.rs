@@ -23,6 +23,7 @@ fn the_mixture_chain_agrees_with_bdpt_and_the_furnace_at_the_cost_of_one_chain()
         chains: 16,
         swap: Swap::Mixture,
         ensembles_below: 0,
+        bdpt_above: None,
         ..TemperedIntegrator::new(5)
     };
     let cases = [

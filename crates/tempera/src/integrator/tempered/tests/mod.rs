@@ -236,6 +236,7 @@ mod reuse {
             ladder: vec![0.1, 0.3, 0.9],
             reuse_replicas: true,
             ensembles_below: 0,
+            bdpt_above: None,
             ..TemperedIntegrator::new(5)
         };
         let out = t.render(&scene, &settings(256, 2), &control).unwrap();
@@ -293,6 +294,7 @@ mod splats {
                 chains: 16,
                 replica_splats,
                 ensembles_below: 0,
+                bdpt_above: None,
                 ..TemperedIntegrator::new(3)
             };
             for seed in 0..seeds {
@@ -342,6 +344,7 @@ mod start {
             ladder: vec![0.2, 0.5, 1.0],
             reuse_replicas: true,
             ensembles_below: 0,
+            bdpt_above: None,
             ..TemperedIntegrator::new(3)
         };
         let seeds = 8;

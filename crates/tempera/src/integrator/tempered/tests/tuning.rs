@@ -59,7 +59,7 @@ fn tune(scene: &Scene, burn_in: u64) -> (f64, Vec<f32>) {
     let tuning = if burn_in > 0 { LadderTuning::BurnIn } else { LadderTuning::None };
     acceptance_and_ladder(
         scene,
-        TemperedIntegrator { tuning, burn_in, ensembles_below: 0, ..TemperedIntegrator::new(3) },
+        TemperedIntegrator { tuning, burn_in, ensembles_below: 0, bdpt_above: None, ..TemperedIntegrator::new(3) },
         16,
     )
 }
@@ -69,8 +69,14 @@ fn tune(scene: &Scene, burn_in: u64) -> (f64, Vec<f32>) {
 fn assert_reaches_targets(tuning: LadderTuning) {
     let scene = glossy_corner(0.08);
     let run = |swap_target| {
-        let t =
-            TemperedIntegrator { tuning, burn_in: 2000, swap_target, ensembles_below: 0, ..TemperedIntegrator::new(3) };
+        let t = TemperedIntegrator {
+            tuning,
+            burn_in: 2000,
+            swap_target,
+            ensembles_below: 0,
+            bdpt_above: None,
+            ..TemperedIntegrator::new(3)
+        };
         acceptance_and_ladder(&scene, t, 128)
     };
     let (acc8, ladder8) = run(0.8);
@@ -126,6 +132,7 @@ fn a_power_flattened_ladder_reaches_the_papers_acceptance_where_roughening_canno
         replicas: 2,
         swap_target: TARGET,
         ensembles_below: 0,
+        bdpt_above: None,
         ..TemperedIntegrator::new(3)
     };
     let (rough, rough_ladder) = acceptance_and_ladder_of(&scene, t(Flattening::Roughen), 128);
