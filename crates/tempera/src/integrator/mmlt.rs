@@ -159,10 +159,11 @@ impl Integrator for MmltIntegrator {
             .with_measured_efficiency(self.measure_efficiency)
             .with_bridge_above(self.bridge_above);
         let target = |depth| DepthTarget { scene, depth };
-        chains.render(scene, settings, control, depths, target, |cx| {
+        let start = |cx: crate::mcmc::StartContext| {
             let k = cx.group.k;
             Single::start(cx, target(k))
-        })
+        };
+        chains.render(scene, settings, control, depths, target, start, None)
     }
 
     fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {

@@ -54,7 +54,7 @@ impl Integrator for PssmltIntegrator {
         control.check_memory(self.memory_estimate(scene, settings.threads), "the splat buffer")?;
         let chain = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability);
         let target = |_| FullTarget { scene, max_depth: self.max_depth };
-        let mut out = chain.render(scene, settings, control, 1, target, |cx| Single::start(cx, target(0)))?;
+        let mut out = chain.render(scene, settings, control, 1, target, |cx| Single::start(cx, target(0)), None)?;
         for d in &mut out.chains {
             d.all_depths = true;
         }

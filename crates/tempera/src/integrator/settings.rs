@@ -242,7 +242,7 @@ pub struct IntegratorSettings {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bridge_above: Option<f64>,
     /// Tempered MMLT: render by bidirectional path tracing alone where the bootstrap's
-    /// independent acceptance ([`crate::mcmc::bootstrap::independent_acceptance`]) exceeds this
+    /// independent acceptance ([`crate::mcmc::acceptance::independent_acceptance`]) exceeds this
     /// (default [`crate::integrator::tempered::DEFAULT_BDPT_ABOVE`]; infinity: never).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bdpt_above: Option<f64>,

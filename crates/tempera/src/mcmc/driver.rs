@@ -216,9 +216,11 @@ impl ChainSettings {
     }
 
     /// Renders with `groups` independent sets of walkers (MMLT: one per path depth; PSSMLT:
-    /// one), group `k` bootstrapped under `targets(k)` and its walkers started by
-    /// `start_walker`. The statistics carry one row per group. An error when no light path
-    /// reaches the camera.
+    /// one), group `k` bootstrapped under `targets(k)` (or taken from `bootstraps`, made by
+    /// [`Self::bootstrap_groups`] under the same seed and targets: the same image without
+    /// bootstrapping again) and its walkers started by `start_walker`. The statistics carry one
+    /// row per group. An error when no light path reaches the camera.
+    #[allow(clippy::too_many_arguments)]
     pub fn render<T, W>(
         &self,
         scene: &Scene,
@@ -227,13 +229,14 @@ impl ChainSettings {
         groups: usize,
         targets: impl Fn(usize) -> T + Sync,
         start_walker: impl Fn(StartContext) -> W + Sync,
+        bootstraps: Option<Bootstraps>,
     ) -> Result<RenderOutput, String>
     where
         T: Target + Sync,
         W: Walker,
     {
         let render = RenderLoop::new(settings, control);
-        render.install(|| self.render_in_pool(&render, scene, settings, groups, &targets, &start_walker, None))
+        render.install(|| self.render_in_pool(&render, scene, settings, groups, &targets, &start_walker, bootstraps))
     }
 
     /// Bootstraps every group as [`Self::render`] does (the same samples, so the same values),
@@ -250,29 +253,6 @@ impl ChainSettings {
         render
             .install(|| self.bootstrap(settings.seed, groups, &targets))
             .map(|(boots, rays)| Bootstraps { boots, rays })
-    }
-
-    /// [`Self::render`] from the bootstraps [`Self::bootstrap_groups`] made under the same
-    /// seed and targets: the same image, without bootstrapping again.
-    #[allow(clippy::too_many_arguments)]
-    pub fn render_bootstrapped<T, W>(
-        &self,
-        scene: &Scene,
-        settings: &RenderSettings,
-        control: &RenderControl,
-        groups: usize,
-        targets: impl Fn(usize) -> T + Sync,
-        start_walker: impl Fn(StartContext) -> W + Sync,
-        bootstraps: Bootstraps,
-    ) -> Result<RenderOutput, String>
-    where
-        T: Target + Sync,
-        W: Walker,
-    {
-        let render = RenderLoop::new(settings, control);
-        render.install(|| {
-            self.render_in_pool(&render, scene, settings, groups, &targets, &start_walker, Some(bootstraps))
-        })
     }
 
     /// Bootstraps every group; an error when all of them saw no light.

@@ -4,6 +4,7 @@
 //! and seeds the chains ([`bootstrap`]), the driver that runs them under a budget
 //! ([`driver`]), and their statistics.
 
+pub mod acceptance;
 pub mod all_strategies;
 pub mod bootstrap;
 pub mod bridge;

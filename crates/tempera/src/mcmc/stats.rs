@@ -43,7 +43,7 @@ pub struct DepthStats {
     /// Non-zero values among the bootstrap's samples.
     pub bootstrap_nonzero: u64,
     /// The large-step acceptance the bootstrap predicts for the depth's chains at equilibrium
-    /// ([`super::bootstrap::large_step_acceptance`]).
+    /// ([`super::acceptance::large_step_acceptance`]).
     pub large_step_estimate: f64,
     /// The depth was sampled independently instead of by chains (its bootstrap had too few
     /// non-zero values to start them apart; see [`super::independent`]): `mutations` counts
@@ -65,7 +65,7 @@ pub struct DepthStats {
     /// What the pilot of `--hybrid auto` measured and chose
     /// ([`crate::integrator::hybrid_pilot`]), in depth 0's row.
     pub hybrid_choice: Option<crate::integrator::hybrid_pilot::HybridChoice>,
-    /// The bootstrap's independent acceptance ([`super::bootstrap::independent_acceptance`])
+    /// The bootstrap's independent acceptance ([`super::acceptance::independent_acceptance`])
     /// where tempered MMLT chose between its chains and BDPT by it, in depth 0's row.
     pub independent_acceptance: Option<f64>,
     /// The sums of the bridge estimate of `b` ([`super::bridge`]) over the group's main chains.

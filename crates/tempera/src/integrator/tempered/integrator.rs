@@ -17,7 +17,8 @@ use crate::integrator::{
     BdptIntegrator, Budget, Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap,
 };
 use crate::math::rng::{Pcg32, hash};
-use crate::mcmc::bootstrap::{count_nonzero, independent_acceptance};
+use crate::mcmc::acceptance::independent_acceptance;
+use crate::mcmc::bootstrap::count_nonzero;
 use crate::mcmc::{Bootstraps, ChainSettings, Flattening, Single, StartContext, TemperedTarget};
 use crate::scene::Scene;
 use std::time::{Duration, Instant};
@@ -360,7 +361,7 @@ impl Integrator for TemperedIntegrator {
         // Per-depth images and the chains' measured efficiency are the chains' own.
         let choose = self.hybrid == 0.0 && !self.depth_images && !self.measure_efficiency;
         let Some(above) = self.bdpt_above.filter(|_| choose) else {
-            return chains.render(scene, settings, control, depths, main, start);
+            return chains.render(scene, settings, control, depths, main, start, None);
         };
         // The bootstrap first, to choose by; the render then gets the rest of a time budget
         // (its snapshots as much earlier), and the chains reuse the bootstrap.
@@ -381,7 +382,7 @@ impl Integrator for TemperedIntegrator {
             out.stats.rays += bootstrap_rays;
             out
         } else {
-            chains.render_bootstrapped(scene, &rest, &control, depths, main, start, bootstraps)?
+            chains.render(scene, &rest, &control, depths, main, start, Some(bootstraps))?
         };
         out.stats.seconds += spent.as_secs_f64();
         if let Some(first) = out.chains.first_mut() {
