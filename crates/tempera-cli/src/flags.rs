@@ -28,6 +28,10 @@ pub struct IntegratorFlags {
     /// Markov-chain integrators: probability of a large step.
     #[arg(long)]
     pub large_step: Option<f32>,
+    /// Markov-chain integrators: standard deviation of a small step in primary sample space
+    /// (default 0.01, as pbrt-v4's MLT).
+    #[arg(long)]
+    pub sigma: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths: in proportion to their
     /// normalisation b_k (MMLT's default), to b_k times the spread of their light over their
     /// paths, or (tempered MMLT only, its default) by b_k times spread at the depths with
@@ -193,6 +197,7 @@ impl IntegratorFlags {
             bootstrap: self.bootstrap,
             chains: self.chains,
             large_step: self.large_step,
+            sigma: self.sigma,
             allocation: self.allocation,
             independent_below: self.independent_below,
             normaliser_share: self.normaliser_share,

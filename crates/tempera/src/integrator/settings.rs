@@ -204,6 +204,10 @@ pub struct IntegratorSettings {
     /// Markov-chain integrators: the probability of a large step.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub large_step: Option<f32>,
+    /// Markov-chain integrators: the standard deviation of a small step in primary sample space
+    /// (pbrt-v4's `sigma`, default 0.01).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub allocation: Option<Allocation>,
@@ -361,6 +365,7 @@ impl IntegratorSettings {
             ("bootstrap", self.bootstrap.is_some(), chain),
             ("chains", self.chains.is_some(), chain),
             ("large_step", self.large_step.is_some(), chain),
+            ("sigma", self.sigma.is_some(), chain),
             ("allocation", self.allocation.is_some(), kind == Mmlt || tempered),
             ("independent_below", self.independent_below.is_some(), kind == Mmlt || tempered),
             ("normaliser_share", self.normaliser_share.is_some(), kind == Mmlt || tempered),
@@ -431,6 +436,9 @@ impl IntegratorSettings {
         check_range("independent_below", self.independent_below, 0..=100_000_000)?;
         check_probability("large_step", self.large_step.map(f64::from))?;
         check_probability("hot_large_step", self.hot_large_step.map(f64::from))?;
+        if let Some(sigma) = self.sigma.filter(|s| !(*s > 0.0 && *s <= 1.0)) {
+            return Err(format!("sigma must lie in (0, 1], not {sigma}"));
+        }
         check_probability("hot_weight", self.hot_weight)?;
         check_range("replicas", self.replicas, 1..=32)?;
         check_range("burn_in", self.burn_in, 1..=10_000_000)?;

@@ -37,6 +37,9 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
         (IntegratorKind::Tempered, IntegratorSettings { ladder: Some(vec![-0.1, 0.3]), ..ok.clone() }, "[0, 1000]"),
         (IntegratorKind::Mmlt, IntegratorSettings { large_step: Some(0.0), ..Default::default() }, "probability"),
         (IntegratorKind::Mmlt, IntegratorSettings { chains: Some(0), ..Default::default() }, "chains must lie"),
+        (IntegratorKind::Mmlt, IntegratorSettings { sigma: Some(0.0), ..Default::default() }, "sigma must lie"),
+        (IntegratorKind::Pssmlt, IntegratorSettings { sigma: Some(f32::NAN), ..Default::default() }, "sigma must lie"),
+        (IntegratorKind::Bdpt, IntegratorSettings { sigma: Some(0.02), ..Default::default() }, "sigma is not"),
         (
             IntegratorKind::Tempered,
             IntegratorSettings { max_temperature: Some(0.5), ..Default::default() },

@@ -32,6 +32,7 @@ pub fn create(
                 bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
                 chains: s.chains.unwrap_or(m.chains),
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
+                sigma: s.sigma.unwrap_or(m.sigma),
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
                 independent_below: s.independent_below.unwrap_or(m.independent_below),
                 normaliser_share: s.normaliser_share.unwrap_or(m.normaliser_share),
@@ -52,6 +53,7 @@ pub fn create(
                 bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
                 chains: s.chains.unwrap_or(m.chains),
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
+                sigma: s.sigma.unwrap_or(m.sigma),
                 ..m
             })
         }
@@ -61,6 +63,7 @@ pub fn create(
                 bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
                 chains: s.chains.unwrap_or(m.chains),
                 large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
+                sigma: s.sigma.unwrap_or(m.sigma),
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a != Allocation::Normalisation),
                 spread_only_sparse: s.allocation.map_or(m.spread_only_sparse, |a| a == Allocation::Sparse),
                 replicas: s.replica_count().unwrap_or(m.replicas),
