@@ -29,6 +29,17 @@ pub fn run(args: InfoArgs) -> Result<()> {
     if let Some(i) = &s.defaults.integrator {
         println!("  integrator    {i}");
     }
+    let c = &s.defaults.chain;
+    if let Some(mpp) = c.mpp {
+        let given = |name: &str, v: Option<String>| v.map(|v| format!(", {name} {v}")).unwrap_or_default();
+        println!(
+            "  chains        {mpp} mutations/pixel{}{}{}{}",
+            given("bootstrap", c.bootstrap.map(|n| n.to_string())),
+            given("chains per depth", c.chains.map(|n| n.to_string())),
+            given("large step", c.large_step.map(|p| p.to_string())),
+            given("sigma", c.sigma.map(|s| s.to_string())),
+        );
+    }
     if let Some(o) = &s.defaults.output {
         println!("  output        {}", o.display());
     }

@@ -192,7 +192,7 @@ pub fn run_on(args: RenderArgs, cluster: &dyn Cluster) -> Result<()> {
         integrator::create(kind, &settings, &scene.defaults).map_err(|e| anyhow::anyhow!("{kind}: {e}"))?;
     let budget = match args.time {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),
-        None => Budget::Samples(args.mpp.or(args.spp).unwrap_or(scene.defaults.spp)),
+        None => Budget::Samples(args.mpp.or(args.spp).unwrap_or(scene.defaults.per_pixel(kind))),
     };
     let render_settings = RenderSettings { budget, seed: args.seed, threads: args.threads };
     run::install_interrupt_handler();

@@ -218,7 +218,7 @@ pub fn render(
     let film = (guard.film.width, guard.film.height);
     let budget = match time {
         Some(t) => Budget::Time(Duration::from_secs_f64(t)),
-        None => Budget::Samples(mpp.or(spp).unwrap_or(guard.defaults.spp)),
+        None => Budget::Samples(mpp.or(spp).unwrap_or(guard.defaults.per_pixel(kind))),
     };
     let pixels = u64::from(film.0) * u64::from(film.1);
     let (total, unit) = match budget {

@@ -343,3 +343,40 @@ fn the_sppm_integrator_keeps_its_photons_and_radius() {
     let bad = load_text("Integrator \"sppm\" \"float radius\" -1\nCamera \"perspective\"\nWorldBegin\n");
     assert!(bad.err().unwrap().to_string().contains("positive radius"));
 }
+
+/// pbrt-v4's `mlt` integrator selects MMLT with its parameters: mutations per pixel (pbrt-v4's
+/// 100 where none is given), bootstrap samples, `chains` over all depths as Tempera's chains
+/// per depth (rounded up), the large-step probability and `sigma`; `regularize`, which
+/// Tempera does not have, is warned about, and values out of range are errors at their line.
+#[test]
+fn the_mlt_integrator_keeps_its_parameters() {
+    let loaded = load_text(
+        "Integrator \"mlt\" \"integer mutationsperpixel\" 256 \"integer bootstrapsamples\" 5000 \
+         \"integer chains\" 100 \"float largestepprobability\" 0.2 \"float sigma\" 0.02 \"integer maxdepth\" 4\n\
+         Camera \"perspective\"\nWorldBegin\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let d = loaded.builder.build().unwrap().defaults;
+    assert_eq!(d.integrator, Some(tempera::integrator::IntegratorKind::Mmlt));
+    let c = &d.chain;
+    assert_eq!(
+        (c.mpp, c.bootstrap, c.chains, c.large_step, c.sigma),
+        (Some(256), Some(5000), Some(20), Some(0.2), Some(0.02))
+    );
+    let plain = load_text("Integrator \"mlt\" \"bool regularize\" true\nCamera \"perspective\"\nWorldBegin\n").unwrap();
+    assert!(plain.warnings.iter().any(|w| w.to_string().contains("regularize")), "{:?}", plain.warnings);
+    let c = plain.builder.build().unwrap().defaults.chain;
+    assert_eq!((c.mpp, c.bootstrap, c.chains, c.large_step, c.sigma), (Some(100), None, None, None, None));
+    let other = load_text("Integrator \"bdpt\"\nCamera \"perspective\"\nWorldBegin\n").unwrap();
+    assert_eq!(other.builder.build().unwrap().defaults.chain, tempera::scene::ChainDefaults::default());
+    for (params, needle) in [
+        ("\"float sigma\" 0", "sigma 0 must lie in (0, 1]"),
+        ("\"float largestepprobability\" 1.5", "largestepprobability 1.5"),
+        ("\"integer chains\" 0", "chains 0 is out of range"),
+        ("\"integer mutationsperpixel\" -3", "mutationsperpixel -3 is out of range"),
+    ] {
+        let e = error(&format!("Integrator \"mlt\" {params}\nCamera \"perspective\"\nWorldBegin\n"));
+        assert!(e.contains(needle) && e.contains(":1:"), "{params}: {e}");
+    }
+}

@@ -13,6 +13,7 @@ use tempera::film::Filter;
 use tempera::integrator::IntegratorKind;
 use tempera::math::{Mat4, Vec3};
 use tempera::medium::MediumInterface;
+use tempera::scene::ChainDefaults;
 
 /// Reads a quoted-string argument.
 pub(super) fn string_arg(lx: &mut Lexer, what: &str) -> Result<(String, Loc), LoadError> {
@@ -390,7 +391,54 @@ impl Loader {
             self.cx.defaults.radius = Some(radius as f32);
             params.int("seed", 0)?;
         }
+        if ty == "mlt" {
+            self.mlt_parameters(&params, &at, depth)?;
+        }
         self.report_unused(&params, &format!("Integrator \"{ty}\""))
+    }
+
+    /// pbrt-v4's `mlt` parameters for Tempera's Markov-chain integrators: mutations per pixel
+    /// (pbrt-v4's default 100, whatever the sampler's samples per pixel), bootstrap samples
+    /// per path depth (as pbrt-v4 counts them), the large-step probability and `sigma`. pbrt-v4
+    /// counts `chains` over all depths, Tempera per depth: `chains` over the `maxdepth + 1`
+    /// depths, rounded up. `regularize`, which Tempera does not have, is warned about.
+    fn mlt_parameters(&mut self, params: &ParamSet, at: &Loc, depth: i64) -> Result<(), LoadError> {
+        let int = |name: &str| params.ints(name).map(|v| v.and_then(|v| v.first().copied()));
+        let float = |name: &str| params.floats(name).map(|v| v.and_then(|v| v.first().copied()));
+        let out_of_range = |message: String| LoadError::Syntax { loc: at.clone(), message };
+        let mpp = int("mutationsperpixel")?.unwrap_or(100);
+        if !(1..=1 << 24).contains(&mpp) {
+            return Err(out_of_range(format!("mutationsperpixel {mpp} is out of range [1, 16777216]")));
+        }
+        let count = |name: &str| -> Result<Option<usize>, LoadError> {
+            match int(name)? {
+                Some(n) if !(1..=100_000_000).contains(&n) => {
+                    Err(out_of_range(format!("{name} {n} is out of range [1, 100000000]")))
+                }
+                n => Ok(n.map(|n| n as usize)),
+            }
+        };
+        let (bootstrap, chains) = (count("bootstrapsamples")?, count("chains")?);
+        let large_step = float("largestepprobability")?;
+        if large_step.is_some_and(|p| !(p > 0.0 && p <= 1.0)) {
+            return Err(out_of_range(format!("largestepprobability {} must lie in (0, 1]", large_step.unwrap())));
+        }
+        let sigma = float("sigma")?;
+        if sigma.is_some_and(|s| !(s > 0.0 && s <= 1.0)) {
+            return Err(out_of_range(format!("sigma {} must lie in (0, 1]", sigma.unwrap())));
+        }
+        let depths = depth as usize + 1;
+        self.cx.defaults.chain = ChainDefaults {
+            mpp: Some(mpp as u32),
+            bootstrap,
+            chains: chains.map(|n| n.div_ceil(depths)),
+            large_step: large_step.map(|p| p as f32),
+            sigma: sigma.map(|s| s as f32),
+        };
+        if params.bool("regularize", false)? {
+            self.warn(Some(at), "Integrator \"mlt\": \"regularize\" is not supported; rendering without it")?;
+        }
+        Ok(())
     }
 
     fn filter(&mut self, lx: &mut Lexer) -> Result<(), LoadError> {

@@ -141,3 +141,43 @@ fn hybrid_is_a_ratio_or_auto() {
     assert_eq!(parsed.hybrid, Some(Hybrid::Ratio(0.5)));
     assert!(serde_json::from_str::<IntegratorSettings>(r#"{"hybrid": "sometimes"}"#).is_err());
 }
+
+/// A scene's Markov-chain parameters (pbrt-v4's `mlt` integrator) reach every Markov-chain
+/// integrator as the settings would: with the scene's `sigma`, large-step probability and
+/// chains the image is bit for bit the one those settings give, and another than without
+/// them; settings given override the scene's. Its mutations per pixel are the budget of a
+/// Markov-chain render that names none, and not of other integrators.
+#[test]
+fn the_scenes_chain_parameters_act_as_settings() {
+    use super::tests::render_with;
+    use super::{Budget, IntegratorKind::*};
+    use crate::scene::ChainDefaults;
+    let scene = crate::scenes::cornell_box(8, 8).build().unwrap();
+    let plain = RenderDefaults { max_depth: 3, ..RenderDefaults::default() };
+    let chain =
+        ChainDefaults { mpp: Some(7), bootstrap: Some(500), chains: Some(3), large_step: Some(0.5), sigma: Some(0.05) };
+    let given = RenderDefaults { chain: chain.clone(), ..plain.clone() };
+    let as_settings = IntegratorSettings {
+        bootstrap: Some(500),
+        chains: Some(3),
+        large_step: Some(0.5),
+        sigma: Some(0.05),
+        ..Default::default()
+    };
+    let pixels = |kind, settings: &IntegratorSettings, defaults: &RenderDefaults| {
+        let integrator = create(kind, settings, defaults).unwrap();
+        render_with(&scene, integrator.as_ref(), Budget::Samples(4), 5, 1).image.pixels
+    };
+    for kind in [Mmlt, Pssmlt, Tempered] {
+        // Tempered MMLT keeps its chains on this box (BDPT alone otherwise).
+        let none = IntegratorSettings { bdpt_above: (kind == Tempered).then_some(f64::INFINITY), ..Default::default() };
+        let as_settings = IntegratorSettings { bdpt_above: none.bdpt_above, ..as_settings.clone() };
+        let from_scene = pixels(kind, &none, &given);
+        assert_eq!(from_scene, pixels(kind, &as_settings, &plain), "{kind}");
+        assert_ne!(from_scene, pixels(kind, &none, &plain), "{kind}");
+        let overridden = IntegratorSettings { sigma: Some(0.01), ..as_settings.clone() };
+        assert_eq!(pixels(kind, &overridden, &given), pixels(kind, &overridden, &plain), "{kind}");
+        assert_eq!(given.per_pixel(kind), 7);
+    }
+    assert_eq!((given.per_pixel(Bdpt), plain.per_pixel(Mmlt)), (16, 16));
+}

@@ -45,11 +45,49 @@ pub struct RenderDefaults {
     pub photons: Option<u64>,
     /// SPPM's initial search radius, when the scene says.
     pub radius: Option<f32>,
+    /// The Markov-chain integrators' parameters, where the scene gives them.
+    pub chain: ChainDefaults,
+}
+
+impl RenderDefaults {
+    /// The samples (for the Markov-chain integrators, mutations) per pixel of a render by
+    /// `kind` that names no budget: the scene's mutations per pixel where it gives them and
+    /// `kind` is a Markov-chain integrator, else its samples per pixel.
+    pub fn per_pixel(&self, kind: crate::integrator::IntegratorKind) -> u32 {
+        match self.chain.mpp {
+            Some(mpp) if kind.is_chain() => mpp,
+            _ => self.spp,
+        }
+    }
+}
+
+/// The Markov-chain integrators' parameters a scene may give (pbrt-v4's `mlt` integrator):
+/// each `None` leaves Tempera's default.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ChainDefaults {
+    /// Mutations per pixel, the budget when none is given.
+    pub mpp: Option<u32>,
+    /// Bootstrap samples per path depth.
+    pub bootstrap: Option<usize>,
+    /// Chains per path depth.
+    pub chains: Option<usize>,
+    /// The probability of a large step.
+    pub large_step: Option<f32>,
+    /// The standard deviation of a small step.
+    pub sigma: Option<f32>,
 }
 
 impl Default for RenderDefaults {
     fn default() -> Self {
-        Self { spp: 16, max_depth: 5, integrator: None, output: None, photons: None, radius: None }
+        Self {
+            spp: 16,
+            max_depth: 5,
+            integrator: None,
+            output: None,
+            photons: None,
+            radius: None,
+            chain: ChainDefaults::default(),
+        }
     }
 }
 

@@ -5,7 +5,9 @@ mod builder;
 #[cfg(test)]
 mod tests;
 
-pub use builder::{AreaEmission, MaterialId, PrototypeId, PrototypeShape, RenderDefaults, SceneBuilder, SceneError};
+pub use builder::{
+    AreaEmission, ChainDefaults, MaterialId, PrototypeId, PrototypeShape, RenderDefaults, SceneBuilder, SceneError,
+};
 
 use crate::accel::{Accel, AccelKind, SceneAccel};
 use crate::bsdf::SurfaceBsdf;

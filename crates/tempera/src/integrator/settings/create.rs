@@ -10,7 +10,8 @@ use crate::scene::RenderDefaults;
 
 /// The integrator `kind` with `settings` (checked first); what they leave out comes from the
 /// scene's `defaults` (paths of at most its `max_depth` scattering events, SPPM's photons and
-/// radius), else from the integrator's own defaults.
+/// radius, the Markov-chain integrators' bootstrap, chains, large-step probability and
+/// sigma), else from the integrator's own defaults.
 pub fn create(
     kind: IntegratorKind,
     settings: &IntegratorSettings,
@@ -19,6 +20,8 @@ pub fn create(
     settings.validate(kind)?;
     let s = settings;
     let d = s.maxdepth.unwrap_or(defaults.max_depth);
+    // The scene's Markov-chain parameters, under the settings given here.
+    let c = &defaults.chain;
     Ok(match kind {
         IntegratorKind::Path => Box::new(PathIntegrator::new(d)),
         IntegratorKind::Bdpt => Box::new(BdptIntegrator {
@@ -29,10 +32,10 @@ pub fn create(
         IntegratorKind::Mmlt => {
             let m = MmltIntegrator::new(d);
             Box::new(MmltIntegrator {
-                bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
-                chains: s.chains.unwrap_or(m.chains),
-                large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
-                sigma: s.sigma.unwrap_or(m.sigma),
+                bootstrap: s.bootstrap.or(c.bootstrap).unwrap_or(m.bootstrap),
+                chains: s.chains.or(c.chains).unwrap_or(m.chains),
+                large_step_probability: s.large_step.or(c.large_step).unwrap_or(m.large_step_probability),
+                sigma: s.sigma.or(c.sigma).unwrap_or(m.sigma),
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a == Allocation::Spread),
                 independent_below: s.independent_below.unwrap_or(m.independent_below),
                 normaliser_share: s.normaliser_share.unwrap_or(m.normaliser_share),
@@ -50,20 +53,20 @@ pub fn create(
         IntegratorKind::Pssmlt => {
             let m = PssmltIntegrator::new(d);
             Box::new(PssmltIntegrator {
-                bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
-                chains: s.chains.unwrap_or(m.chains),
-                large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
-                sigma: s.sigma.unwrap_or(m.sigma),
+                bootstrap: s.bootstrap.or(c.bootstrap).unwrap_or(m.bootstrap),
+                chains: s.chains.or(c.chains).unwrap_or(m.chains),
+                large_step_probability: s.large_step.or(c.large_step).unwrap_or(m.large_step_probability),
+                sigma: s.sigma.or(c.sigma).unwrap_or(m.sigma),
                 ..m
             })
         }
         IntegratorKind::Tempered => {
             let m = if s.paper == Some(true) { TemperedIntegrator::paper(d) } else { TemperedIntegrator::new(d) };
             Box::new(TemperedIntegrator {
-                bootstrap: s.bootstrap.unwrap_or(m.bootstrap),
-                chains: s.chains.unwrap_or(m.chains),
-                large_step_probability: s.large_step.unwrap_or(m.large_step_probability),
-                sigma: s.sigma.unwrap_or(m.sigma),
+                bootstrap: s.bootstrap.or(c.bootstrap).unwrap_or(m.bootstrap),
+                chains: s.chains.or(c.chains).unwrap_or(m.chains),
+                large_step_probability: s.large_step.or(c.large_step).unwrap_or(m.large_step_probability),
+                sigma: s.sigma.or(c.sigma).unwrap_or(m.sigma),
                 spread_allocation: s.allocation.map_or(m.spread_allocation, |a| a != Allocation::Normalisation),
                 spread_only_sparse: s.allocation.map_or(m.spread_only_sparse, |a| a == Allocation::Sparse),
                 replicas: s.replica_count().unwrap_or(m.replicas),
