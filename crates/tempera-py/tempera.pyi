@@ -56,9 +56,10 @@ def render(
     progress: bool = True,
     **settings: Any,
 ) -> RenderResult:
-    """Renders `scene` under one budget (spp, mpp or time seconds; default the scene's spp).
+    """Renders `scene` under one budget (spp, mpp or time seconds; default the scene's spp, or
+    for the Markov-chain integrators the mutations per pixel it gives, as pbrt-v4's `mlt` does).
     Further keyword arguments are the integrator's settings as in experiment files
-    (bootstrap, chains, large_step, allocation, independent_below, normaliser_share, bridge_above, bdpt_above,
+    (bootstrap, chains, large_step, sigma, allocation, independent_below, normaliser_share, bridge_above, bdpt_above,
     replicas, swap, ladder, max_temperature, collapse_above, collapse_below, pilot, tuning, burn_in, swap_target, tempered_mis,
     reuse_replicas, replica_splats, flattening, swap_every, hot_every, hot_large_step, paper, mis, photons, radius,
     photon_sampler). Bad settings raise ValueError. Ctrl-C returns the image so far."""

@@ -134,6 +134,35 @@ fn experiment_writes_results_images_and_report_and_resumes() {
     assert_eq!(csv.lines().count(), 1 + 8, "{csv}");
 }
 
+/// A reference by several seeds is the mean of the single-seed references, pixel by pixel;
+/// each seed's render is kept as it finishes, so adding a seed renders only that seed.
+#[test]
+fn a_reference_by_several_seeds_is_their_mean() {
+    let dir = scratch("reference-seeds");
+    let config = |output: &str, seeds: &str| {
+        TINY.replace("output = \"out\"", &format!("output = \"{output}\""))
+            .replace("spp = 16", &format!("spp = 16\n{seeds}"))
+            .replace("seeds = [1, 2]", "seeds = [1]")
+    };
+    let read = |path: &str| tempera_image::read_image(&dir.join(path), tempera_image::ColorEncoding::Linear).unwrap();
+    for (output, seeds) in [("mean", "seeds = [7, 8]"), ("seven", "seed = 7"), ("eight", "seed = 8")] {
+        let out = run(&dir, &config(output, seeds));
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let (mean, a, b) =
+        (read("mean/reference/default.exr"), read("seven/reference/default.exr"), read("eight/reference/default.exr"));
+    assert_ne!(a.pixels, b.pixels);
+    for ((m, a), b) in mean.pixels.iter().zip(&a.pixels).zip(&b.pixels) {
+        let expected = (*a + *b) / 2.0;
+        assert!((*m - expected).abs().max_element() <= 1e-6 * expected.max_element().max(1.0), "{m} vs {expected}");
+    }
+    assert_eq!(read("mean/reference/default.seed-8.exr").pixels, b.pixels);
+    let more = run(&dir, &config("mean", "seeds = [7, 8, 9]"));
+    assert!(more.status.success(), "{}", stderr(&more));
+    let log = stderr(&more);
+    assert!(log.contains("seed 9") && !log.contains("seed 7") && !log.contains("seed 8"), "{log}");
+}
+
 #[test]
 fn mistakes_in_the_experiment_file_are_clear_errors() {
     let dir = scratch("errors");

@@ -158,8 +158,9 @@ fn settings(maxdepth: Option<u32>, extra: Option<&Bound<'_, PyDict>>) -> PyResul
 
 /// Renders `scene`. `integrator`: "path", "bdpt", "pssmlt", "mmlt" or "tempered" (default:
 /// the scene file's, else path). Budget: `spp` samples per pixel, `mpp` mutations per pixel
-/// (Markov chains), or `time` seconds (default: the scene's spp). Further keyword arguments
-/// are the integrator's settings, named as in experiment files (`bootstrap`, `chains`,
+/// (Markov chains), or `time` seconds (default: the scene's spp, or for a Markov-chain
+/// integrator the mutations per pixel the scene gives). Further keyword arguments are the
+/// integrator's settings, named as in experiment files (`bootstrap`, `chains`,
 /// `replicas`, `swap`, `ladder`, …). Same seed and sample budget: the pixels the command line
 /// writes. Ctrl-C stops the render and returns the image so far (`interrupted` is set).
 #[pyfunction]

@@ -39,6 +39,10 @@ pub struct Reference {
     pub seconds: Option<f64>,
     /// Seed of the reference render (default 1000, apart from the runs' seeds).
     pub seed: Option<u64>,
+    /// Seeds of several reference renders with that budget whose mean is the reference (a
+    /// Markov-chain method's renders, each with its own normalisation, average out); instead
+    /// of `seed`.
+    pub seeds: Option<Vec<u64>>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -199,6 +203,14 @@ impl Config {
         if r.seconds.is_some_and(|t| !t.is_finite() || t <= 0.0) || r.spp == Some(0) {
             bail!("[reference] budget must be positive");
         }
+        if let Some(seeds) = &r.seeds {
+            if r.seed.is_some() || r.image.is_some() {
+                bail!("[reference] takes `seeds` or `seed` (or an image), not both");
+            }
+            if seeds.is_empty() || seeds.iter().enumerate().any(|(i, s)| seeds[..i].contains(s)) {
+                bail!("[reference] `seeds` needs at least one seed, none twice");
+            }
+        }
         Ok(())
     }
 
@@ -302,6 +314,10 @@ seeds = [1, 2]
         assert_eq!(fixed.times(), vec![4.0, 16.0]);
         let res = parse(&BASE.replace("32x32", "32")).unwrap_err();
         assert!(format!("{res:#}").contains("WIDTHxHEIGHT"), "{res:#}");
+        let seeds = parse(&BASE.replace("spp = 64", "spp = 64\nseed = 3\nseeds = [4, 5]")).unwrap_err();
+        assert!(format!("{seeds:#}").contains("`seeds` or `seed`"), "{seeds:#}");
+        let twice = parse(&BASE.replace("spp = 64", "spp = 64\nseeds = [4, 4]")).unwrap_err();
+        assert!(format!("{twice:#}").contains("none twice"), "{twice:#}");
         let kind = parse(&BASE.replace("integrator = \"mmlt\"", "integrator = \"vcm\"")).unwrap_err();
         assert!(format!("{kind:#}").contains("unknown variant `vcm`"), "{kind:#}");
         let foreign =

@@ -46,7 +46,7 @@ fn key(config: &Config, scene: &PreparedScene) -> serde_json::Value {
         return serde_json::json!({ "image": image.display().to_string(), "modified": modified });
     }
     let r = &config.reference;
-    serde_json::json!({
+    let mut key = serde_json::json!({
         "method": r.method.unwrap_or(IntegratorKind::Bdpt),
         "settings": r.settings,
         "spp": if r.seconds.is_none() { Some(r.spp.unwrap_or(DEFAULT_SPP)) } else { None },
@@ -55,7 +55,46 @@ fn key(config: &Config, scene: &PreparedScene) -> serde_json::Value {
         "scene_file": scene.entry.file.as_ref().map(|p| p.display().to_string()),
         "resolution": [film.width, film.height],
         "maxdepth": scene.scene.defaults.max_depth,
-    })
+    });
+    if let Some(seeds) = &r.seeds {
+        let fields = key.as_object_mut().expect("the key is an object");
+        fields.remove("seed");
+        fields.insert("seeds".into(), serde_json::json!(seeds));
+    }
+    key
+}
+
+/// The key of the render with `seed` among a reference's `seeds`: a single render's.
+fn seed_key(config: &Config, scene: &PreparedScene, seed: u64) -> serde_json::Value {
+    let mut key = key(config, scene);
+    let fields = key.as_object_mut().expect("the key is an object");
+    fields.remove("seeds");
+    fields.insert("seed".into(), serde_json::json!(seed));
+    key
+}
+
+/// Where the render with `seed` among a reference's `seeds` is cached, and its key.
+fn seed_paths(config: &Config, scene: &PreparedScene, seed: u64) -> (PathBuf, PathBuf) {
+    let dir = config.output.join("reference");
+    let name = &scene.entry.name;
+    (dir.join(format!("{name}.seed-{seed}.exr")), dir.join(format!("{name}.seed-{seed}.json")))
+}
+
+/// The image at `exr` if the key beside it (`json`) is `key`.
+fn read_if_same(exr: &std::path::Path, json: &std::path::Path, key: &serde_json::Value) -> Option<Image> {
+    let same = std::fs::read_to_string(json)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|k| &k == key);
+    if same { read(exr).ok() } else { None }
+}
+
+/// Writes `image` to `exr` and `key` beside it (`json`).
+fn write_cached(exr: &std::path::Path, json: &std::path::Path, image: &Image, key: &serde_json::Value) -> Result<()> {
+    super::create_folder(exr.parent().expect("reference paths have a folder"))?;
+    write_image(exr, image, &WriteOptions::default())?;
+    tempera_image::write_file_atomically(json, serde_json::to_string_pretty(key).expect("keys serialise").as_bytes())
+        .with_context(|| format!("cannot write {}", json.display()))
 }
 
 fn read(path: &std::path::Path) -> Result<Image> {
@@ -98,14 +137,7 @@ pub fn cached(config: &Config, scene: &PreparedScene) -> Result<Option<Reference
         return Ok(Some(Reference { image, key }));
     }
     let (exr, json, _) = paths(config, scene);
-    let same = std::fs::read_to_string(&json)
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .is_some_and(|k| k == key);
-    if same && let Ok(image) = read(&exr) {
-        return Ok(Some(Reference { image, key }));
-    }
-    Ok(None)
+    Ok(read_if_same(&exr, &json, &key).map(|image| Reference { image, key }))
 }
 
 /// The reference of `scene`, rendering (and caching) it when needed: by every rank of
@@ -136,7 +168,51 @@ pub fn obtain(config: &Config, scene: &PreparedScene, quiet: bool, cluster: &dyn
     Ok(reference)
 }
 
+/// Renders the reference: one render, or the mean of one render per seed of `seeds`, each
+/// cached as it finishes so that an interrupted experiment keeps them.
 fn render(config: &Config, scene: &PreparedScene, quiet: bool, cluster: &dyn Cluster) -> Result<Reference> {
+    let r = &config.reference;
+    let root = cluster.is_root();
+    let image = match &r.seeds {
+        None => render_seed(config, scene, quiet, cluster, r.seed.unwrap_or(DEFAULT_SEED))?,
+        Some(seeds) => {
+            let mut sum: Option<Image> = None;
+            for &seed in seeds {
+                let (exr, json) = seed_paths(config, scene, seed);
+                let key = seed_key(config, scene, seed);
+                let found = if root { read_if_same(&exr, &json, &key) } else { None };
+                let image = if cluster.broadcast(found.is_none()) {
+                    let image = render_seed(config, scene, quiet, cluster, seed)?;
+                    if root {
+                        write_cached(&exr, &json, &image, &key)?;
+                    }
+                    image
+                } else if let Some(image) = found {
+                    image
+                } else {
+                    read(&exr)?
+                };
+                match sum.as_mut() {
+                    None => sum = Some(image),
+                    Some(s) => s.pixels.iter_mut().zip(&image.pixels).for_each(|(a, b)| *a += *b),
+                }
+            }
+            let mut mean = sum.expect("seeds are not empty");
+            let n = seeds.len() as f32;
+            mean.pixels.iter_mut().for_each(|p| *p /= n);
+            mean
+        }
+    };
+    let key = key(config, scene);
+    if root {
+        let (exr, json, _) = paths(config, scene);
+        write_cached(&exr, &json, &image, &key)?;
+    }
+    Ok(Reference { image, key })
+}
+
+/// One render of the reference's method and budget with `seed`.
+fn render_seed(config: &Config, scene: &PreparedScene, quiet: bool, cluster: &dyn Cluster, seed: u64) -> Result<Image> {
     let r = &config.reference;
     let method = r.method.unwrap_or(IntegratorKind::Bdpt);
     let integrator = tempera::integrator::create(method, &r.settings, &scene.scene.defaults)
@@ -152,26 +228,19 @@ fn render(config: &Config, scene: &PreparedScene, quiet: bool, cluster: &dyn Clu
     };
     let root = cluster.is_root();
     if root {
-        eprintln!("scene '{}': rendering the reference with {method}, {what}", scene.entry.name);
+        eprintln!("scene '{}': rendering the reference with {method}, {what}, seed {seed}", scene.entry.name);
     }
-    let settings = RenderSettings { budget, seed: r.seed.unwrap_or(DEFAULT_SEED), threads: config.threads };
+    let settings = RenderSettings { budget, seed, threads: config.threads };
     let out = Job { label: Some(&label), cluster, ..Job::new(&scene.scene, integrator.as_ref(), settings, quiet) }
         .run()
         .with_context(|| format!("scene '{}': reference", scene.entry.name))?;
     if out.stats.cancelled {
-        bail!("interrupted while rendering the reference of '{}' (nothing cached)", scene.entry.name);
+        bail!("interrupted while rendering the reference of '{}' (this render is not cached)", scene.entry.name);
     }
-    let key = key(config, scene);
-    if !root {
-        return Ok(Reference { image: out.image, key });
+    if root {
+        eprintln!("scene '{}': reference rendered in {:.1} s", scene.entry.name, out.stats.seconds);
     }
-    eprintln!("scene '{}': reference rendered in {:.1} s", scene.entry.name, out.stats.seconds);
-    let (exr, json, _) = paths(config, scene);
-    super::create_folder(exr.parent().expect("reference paths have a folder"))?;
-    write_image(&exr, &out.image, &WriteOptions::default())?;
-    tempera_image::write_file_atomically(&json, serde_json::to_string_pretty(&key).expect("keys serialise").as_bytes())
-        .with_context(|| format!("cannot write {}", json.display()))?;
-    Ok(Reference { image: out.image, key })
+    Ok(out.image)
 }
 
 /// The reference image of `scene` relative to the output folder (for the report).
