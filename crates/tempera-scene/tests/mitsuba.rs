@@ -272,3 +272,23 @@ fn the_sppm_integrator_keeps_its_photon_count_and_radius() {
     let auto = load_text(&wrap("<integrator type=\"sppm\"/>")).unwrap();
     assert!(auto.warnings.iter().any(|w| w.message.contains("automatic initial radius")), "{:?}", auto.warnings);
 }
+
+/// Mitsuba's `pssmlt` renders by Tempera's PSSMLT with its `luminanceSamples` as the bootstrap
+/// and `pLarge` as the large-step probability (Mitsuba's defaults 100,000 and 0.3 where absent);
+/// a probability out of range is an error.
+#[test]
+fn the_pssmlt_integrator_keeps_its_bootstrap_and_large_step_probability() {
+    let text = wrap(
+        "<integrator type=\"pssmlt\"><integer name=\"luminanceSamples\" value=\"5000\"/>\
+         <float name=\"pLarge\" value=\"0.2\"/></integrator>",
+    );
+    let loaded = load_text(&text).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let d = loaded.builder.build().unwrap().defaults;
+    assert_eq!(d.integrator, Some(tempera::integrator::IntegratorKind::Pssmlt));
+    assert_eq!((d.chain.bootstrap, d.chain.large_step, d.chain.mpp), (Some(5000), Some(0.2), None));
+    let plain = load_text(&wrap("<integrator type=\"pssmlt\"/>")).unwrap().builder.build().unwrap().defaults;
+    assert_eq!((plain.chain.bootstrap, plain.chain.large_step), (Some(100_000), Some(0.3)));
+    let bad = load_text(&wrap("<integrator type=\"pssmlt\"><float name=\"pLarge\" value=\"0\"/></integrator>"));
+    assert!(bad.err().unwrap().to_string().contains("pLarge must lie in (0, 1]"));
+}

@@ -218,6 +218,9 @@ impl Loader {
         if ty == "sppm" {
             self.sppm_settings(ctx, &props)?;
         }
+        if matches!(ty.as_str(), "mlt" | "pssmlt") {
+            self.chain_settings(ctx, &props, &ty)?;
+        }
         self.ignore(ctx, &props, &["strictNormals"], "an option of Mitsuba's path tracers that Tempera does not offer");
         let quiet = [
             "rrDepth",
@@ -226,7 +229,6 @@ impl Loader {
             "initialRadius",
             "alpha",
             "granularity",
-            "luminanceSamples",
             "twoStage",
             "bidirectional",
             "directSamples",
@@ -240,6 +242,26 @@ impl Loader {
             "a sampling parameter of Mitsuba's integrator; Tempera's integrators sample their own way",
         );
         self.report_unused(ctx, &props, &format!("integrator \"{ty}\""))
+    }
+
+    /// Mitsuba's Markov-chain integrators (rendered by Tempera's PSSMLT, with the sampler's
+    /// samples per pixel as mutations per pixel, as Mitsuba counts them): `luminanceSamples`,
+    /// the samples that estimate the normalisation, as the bootstrap's; and `pssmlt`'s large-step
+    /// probability `pLarge`.
+    fn chain_settings(&mut self, ctx: &Ctx, props: &Props, ty: &str) -> Result<(), LoadError> {
+        let samples = props.int(ctx, "luminanceSamples", 100_000)?;
+        if !(1..=100_000_000).contains(&samples) {
+            return Err(ctx.err(&props.loc, format!("luminanceSamples must lie in [1, 10^8], not {samples}")));
+        }
+        self.cx.defaults.chain.bootstrap = Some(samples as usize);
+        if ty == "pssmlt" {
+            let p = props.float(ctx, "pLarge", 0.3)?;
+            if !(p as f32 > 0.0 && p <= 1.0) {
+                return Err(ctx.err(&props.loc, format!("pLarge must lie in (0, 1], not {p}")));
+            }
+            self.cx.defaults.chain.large_step = Some(p as f32);
+        }
+        Ok(())
     }
 
     /// Mitsuba's `sppm`: `photonCount` photons per pass and `initialRadius` (0: Mitsuba's

@@ -420,11 +420,11 @@ impl Loader {
         };
         let (bootstrap, chains) = (count("bootstrapsamples")?, count("chains")?);
         let large_step = float("largestepprobability")?;
-        if large_step.is_some_and(|p| !(p > 0.0 && p <= 1.0)) {
+        if large_step.is_some_and(|p| !(p as f32 > 0.0 && p <= 1.0)) {
             return Err(out_of_range(format!("largestepprobability {} must lie in (0, 1]", large_step.unwrap())));
         }
         let sigma = float("sigma")?;
-        if sigma.is_some_and(|s| !(s > 0.0 && s <= 1.0)) {
+        if sigma.is_some_and(|s| !(s as f32 > 0.0 && s <= 1.0)) {
             return Err(out_of_range(format!("sigma {} must lie in (0, 1]", sigma.unwrap())));
         }
         let depths = depth as usize + 1;
