@@ -219,6 +219,33 @@ fn mmlt_renders_with_a_mutation_budget() {
     assert_clean_error(&["render", "--mpp", "4", "--spp", "4"], "cannot be used with");
 }
 
+/// A pbrt-v4 file's `mlt` integrator renders with its mutations per pixel and prints its
+/// parameters in `tempera info`; another integrator asked for on the command line keeps the
+/// sampler's samples per pixel.
+#[test]
+fn pbrt_v4s_mlt_parameters_set_the_render() {
+    let dir = scratch("mlt-file");
+    std::fs::write(
+        dir.join("mlt.pbrt"),
+        "Integrator \"mlt\" \"integer mutationsperpixel\" 3 \"float sigma\" 0.02 \"integer maxdepth\" 3\n\
+         Sampler \"independent\" \"integer pixelsamples\" 2\n\
+         Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nCamera \"perspective\"\n\
+         WorldBegin\nLightSource \"point\" \"rgb I\" [1 1 1]\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let run = |args: &[&str]| {
+        let out = tempera().current_dir(&dir).args(args).output().unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out))
+    };
+    let info = run(&["info", "mlt.pbrt"]);
+    assert!(info.contains("3 mutations/pixel") && info.contains("sigma 0.02"), "{info}");
+    let mlt = run(&["render", "mlt.pbrt", "-o", "m.exr"]);
+    assert!(mlt.contains("with mmlt: 3.0 mutations/pixel"), "{mlt}");
+    let bdpt = run(&["render", "mlt.pbrt", "--integrator", "bdpt", "-o", "b.exr"]);
+    assert!(bdpt.contains("with bdpt: 2.0 spp"), "{bdpt}");
+}
+
 #[test]
 fn stats_json_reports_every_depth() {
     let dir = scratch("stats");
