@@ -19,7 +19,8 @@ class SceneError(Exception):
 class Scene:
     def info(self) -> dict[str, Any]:
         """Resolution, primitives, emitters, materials and lights by type, the file's
-        defaults (spp, maxdepth, integrator) and the loader's warnings with file:line."""
+        defaults (spp, maxdepth, integrator; mpp, the mutations per pixel of pbrt-v4's `mlt`)
+        and the loader's warnings with file:line."""
 
 class RenderResult:
     @property

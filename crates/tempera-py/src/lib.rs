@@ -43,6 +43,7 @@ impl PyScene {
         d.set_item("resolution", (scene.film.width, scene.film.height))?;
         d.set_item("spp", scene.defaults.spp)?;
         d.set_item("maxdepth", scene.defaults.max_depth)?;
+        d.set_item("mpp", scene.defaults.chain.mpp)?;
         d.set_item("integrator", scene.defaults.integrator.map(|k| k.to_string()))?;
         d.set_item("primitives", scene.geometry.prims.len())?;
         d.set_item("emitters", scene.lights.len())?;

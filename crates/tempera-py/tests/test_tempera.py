@@ -49,6 +49,19 @@ def test_loaded_scene_reports_its_contents_and_warnings():
     assert all(isinstance(w, str) for w in info["warnings"])
 
 
+def test_a_pbrt_mlt_file_sets_the_mutations_per_pixel(tmp_path):
+    path = tmp_path / "mlt.pbrt"
+    path.write_text(
+        'Integrator "mlt" "integer mutationsperpixel" 3 "integer maxdepth" 3\n'
+        'Film "rgb" "integer xresolution" 16 "integer yresolution" 16\nCamera "perspective"\n'
+        'WorldBegin\nLightSource "point" "rgb I" [1 1 1]\nShape "sphere"\n'
+    )
+    scene = tempera.load(path)
+    assert scene.info()["mpp"] == 3 and scene.info()["integrator"] == "mmlt"
+    result = tempera.render(scene, seed=1, progress=False)
+    assert result.stats["integrator"] == "mmlt" and result.stats["samples"] == 16 * 16 * 3
+
+
 @pytest.mark.parametrize(
     "integrator,flags,kwargs",
     [
