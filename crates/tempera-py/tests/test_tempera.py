@@ -59,7 +59,8 @@ def test_a_pbrt_mlt_file_sets_the_mutations_per_pixel(tmp_path):
     scene = tempera.load(path)
     assert scene.info()["mpp"] == 3 and scene.info()["integrator"] == "mmlt"
     result = tempera.render(scene, seed=1, progress=False)
-    assert result.stats["integrator"] == "mmlt" and result.stats["samples"] == 16 * 16 * 3
+    # MMLT rounds each depth's share of the budget to whole rounds of its chains.
+    assert result.stats["integrator"] == "mmlt" and abs(result.stats["samples"] / (16 * 16) - 3) < 0.05
 
 
 @pytest.mark.parametrize(
