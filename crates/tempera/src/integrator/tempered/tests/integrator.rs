@@ -334,27 +334,26 @@ fn swap_steps_follow_the_swap_interval() {
 fn bdpt_alone_where_the_bootstrap_says_the_chains_cannot_pay() {
     let mut scene = crate::scenes::default_scene().build().unwrap();
     scene.set_resolution(24, 24);
-    let cancel = AtomicBool::new(false);
-    let control = RenderControl::new(&cancel, &|_| {});
+    let render = |i: &dyn Integrator, scene, mpp, threads| render_with(scene, i, Budget::Samples(mpp), 3, threads);
     let t = TemperedIntegrator { bootstrap: 20_000, chains: 16, ..TemperedIntegrator::new(5) };
-    let out = t.render(&scene, &settings(64, 3, 0), &control).unwrap();
+    let out = render(&t, &scene, 64, 0);
     let a = out.chains[0].independent_acceptance.expect("the choice is reported");
     assert!(a > crate::integrator::tempered::DEFAULT_BDPT_ABOVE, "{a}");
     assert!(out.chains.iter().all(|d| d.mutations == 0), "no chains ran");
     let spp = out.stats.spp_completed;
     assert!((1..64).contains(&spp), "{spp} samples per pixel");
-    let bdpt = BdptIntegrator::new(5).render(&scene, &settings(spp, 3, 0), &control).unwrap();
+    let bdpt = render(&BdptIntegrator::new(5), &scene, spp, 0);
     assert!(out.image.pixels == bdpt.image.pixels, "BDPT's image");
-    let again = t.render(&scene, &settings(64, 3, 1), &control).unwrap();
+    let again = render(&t, &scene, 64, 1);
     assert!(again.image.pixels == out.image.pixels, "the same image at any thread count");
 
     let glossy = super::tuning::glossy_corner(0.02);
     let t = TemperedIntegrator { bootstrap: 20_000, chains: 8, ..TemperedIntegrator::new(3) };
-    let chosen = t.render(&glossy, &settings(16, 3, 0), &control).unwrap();
+    let chosen = render(&t, &glossy, 16, 0);
     let a = chosen.chains[0].independent_acceptance.expect("the choice is reported");
     assert!(a < crate::integrator::tempered::DEFAULT_BDPT_ABOVE, "{a}");
     assert!(chosen.chains.iter().any(|d| d.mutations > 0), "the chains ran");
-    let never = TemperedIntegrator { bdpt_above: None, ..t }.render(&glossy, &settings(16, 3, 0), &control).unwrap();
+    let never = render(&TemperedIntegrator { bdpt_above: None, ..t }, &glossy, 16, 0);
     assert!(chosen.image.pixels == never.image.pixels, "the chains' image, bootstrapped once");
     assert!(never.chains[0].independent_acceptance.is_none());
 }
