@@ -54,6 +54,15 @@ pub struct IntegratorFlags {
     /// own pixels instead of on its depth's normalisation (default 0: never)
     #[arg(long, value_name = "F")]
     pub target_clamp: Option<f64>,
+    /// MMLT and tempered MMLT: shape the chains' targets per pixel by a pilot of N samples per
+    /// pixel of bidirectional path tracing, so that dim pixels get about as many mutations as
+    /// bright ones and the image's relative error evens out (default 0: MMLT's target)
+    #[arg(long, value_name = "N")]
+    pub importance_pilot: Option<u32>,
+    /// MMLT and tempered MMLT with --importance-pilot: pixels darker than F times the pilot
+    /// image's mean get fewer mutations, in proportion to their brightness (default 0.25)
+    #[arg(long, value_name = "F")]
+    pub importance_floor: Option<f64>,
     /// MMLT and tempered MMLT: R samples of bidirectional path tracing per main-chain
     /// mutation, combined with the chains by multiple importance sampling: the samples carry
     /// the dim parts of the image, the chains the bright, hard-to-find paths (default 0: the
@@ -202,6 +211,8 @@ impl IntegratorFlags {
             independent_below: self.independent_below,
             normaliser_share: self.normaliser_share,
             target_clamp: self.target_clamp,
+            importance_pilot: self.importance_pilot,
+            importance_floor: self.importance_floor,
             hybrid: self.hybrid,
             chain_efficiency: self.chain_efficiency,
             hybrid_share: self.hybrid_share,

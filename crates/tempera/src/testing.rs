@@ -172,6 +172,18 @@ pub fn mmlt_target_moments(scene: &crate::scene::Scene, k: usize, seed: u64, n: 
 /// The values of MMLT's depth-`k` target at `n` independent uniform samples (the bootstrap's
 /// samples of seed `seed`).
 pub fn mmlt_target_values(scene: &crate::scene::Scene, k: usize, seed: u64, n: usize) -> Vec<f64> {
+    shaped_target_values(scene, k, seed, n, None)
+}
+
+/// [`mmlt_target_values`] of the target shaped per pixel by `importance`
+/// ([`crate::mcmc::importance`]; `None`: MMLT's own).
+pub fn shaped_target_values(
+    scene: &crate::scene::Scene,
+    k: usize,
+    seed: u64,
+    n: usize,
+    importance: Option<&crate::mcmc::importance::ImportanceMap>,
+) -> Vec<f64> {
     use crate::mcmc::{ChainSettings, EvalContext, evaluate, sampler_for};
     use rayon::prelude::*;
     let settings = ChainSettings::new(0, 0, 0.01, 0.3);
@@ -179,7 +191,7 @@ pub fn mmlt_target_values(scene: &crate::scene::Scene, k: usize, seed: u64, n: u
         .into_par_iter()
         .map(|i| {
             let mut cx = EvalContext::new(sampler_for(seed, k, i, &settings));
-            f64::from(evaluate(scene, k, &mut cx).f)
+            f64::from(evaluate(scene, k, &mut cx, importance).f)
         })
         .collect()
 }

@@ -58,9 +58,9 @@ fn the_clamped_normaliser_estimates_the_clamped_mean() {
         let c = 1.5 * nonzero.iter().sum::<f64>() / nonzero.len() as f64;
         let mut clamped = Moments::default();
         values.iter().for_each(|&v| clamped.push(v.min(c)));
-        let (all, _) = all_strategies(&scene, k, 9, n, c as f32);
+        let (all, _) = all_strategies(&scene, k, 9, n, (c as f32, None));
         crate::testing::assert_same_mean(&format!("depth {k}"), &clamped, &all.moments);
-        let (unclamped, _) = all_strategies(&scene, k, 9, n, f32::INFINITY);
+        let (unclamped, _) = all_strategies(&scene, k, 9, n, (f32::INFINITY, None));
         let (mc, ec) = all.moments.mean_and_rel_se();
         let (mu, eu) = unclamped.moments.mean_and_rel_se();
         let sigma = ((mc * ec).powi(2) + (mu * eu).powi(2)).sqrt();

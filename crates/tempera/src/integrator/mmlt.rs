@@ -6,6 +6,7 @@
 
 use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
 use crate::mcmc::all_strategies::depth_normaliser;
+use crate::mcmc::importance::ImportanceMap;
 use crate::mcmc::{
     ChainSettings, Contribution, EvalContext, NormaliserMoments, Single, Target, evaluate, evaluate_depths,
 };
@@ -54,6 +55,11 @@ pub struct MmltIntegrator {
     /// Scale each depth's image by the bridge estimate of its normalisation instead of `b` where
     /// [`crate::mcmc::bridge::prefer`] says so at this threshold (`None`: never).
     pub bridge_above: Option<f64>,
+    /// Samples per pixel of the BDPT pilot whose image shapes the chains' targets per pixel
+    /// ([`crate::mcmc::importance`]); 0 (the default, MMLT as published): no shaping.
+    pub importance_pilot: u32,
+    /// The shaping's floor `φ` as a fraction of the pilot image's mean.
+    pub importance_floor: f64,
 }
 
 impl MmltIntegrator {
@@ -75,6 +81,8 @@ impl MmltIntegrator {
             hybrid_auto: false,
             measure_efficiency: false,
             bridge_above: Some(crate::mcmc::bridge::DEFAULT_ABOVE),
+            importance_pilot: 0,
+            importance_floor: crate::mcmc::importance::DEFAULT_FLOOR,
         }
     }
 }
@@ -84,19 +92,21 @@ impl MmltIntegrator {
 pub(crate) struct DepthTarget<'a> {
     pub scene: &'a Scene,
     pub depth: usize,
+    /// The map shaping the target per pixel ([`crate::mcmc::importance`]; `None`: MMLT's).
+    pub importance: Option<&'a ImportanceMap>,
 }
 
 impl Target for DepthTarget<'_> {
     type State = Contribution;
 
     fn evaluate(&self, cx: &mut EvalContext, _: Contribution) -> Contribution {
-        evaluate(self.scene, self.depth, cx)
+        evaluate(self.scene, self.depth, cx, self.importance)
     }
 
     /// Depth 0 (emitters seen directly) from points on the emitters connected to the camera,
     /// deeper paths from every strategy of their depth at once.
     fn normaliser(&self, seed: u64, samples: usize, clamp: f32) -> Option<(NormaliserMoments, u64)> {
-        depth_normaliser(self.scene, self.depth, seed, samples, clamp)
+        depth_normaliser(self.scene, self.depth, seed, samples, (clamp, self.importance))
     }
 
     /// Depths `k ≥ 1`, whose all-strategy normaliser can value the clamped target.
@@ -119,7 +129,7 @@ impl Target for DepthTarget<'_> {
     }
 
     fn value_groups(&self, cx: &mut EvalContext, groups: usize, out: &mut Vec<crate::mcmc::GroupValue>) -> u64 {
-        evaluate_depths(self.scene, groups, cx, out)
+        evaluate_depths(self.scene, groups, cx, out, self.importance)
     }
 }
 
@@ -139,6 +149,11 @@ impl Integrator for MmltIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        super::importance_pilot::check(
+            self.importance_pilot,
+            self.hybrid > 0.0 || self.hybrid_auto,
+            self.measure_efficiency,
+        )?;
         if self.hybrid_auto {
             let chains = Self { hybrid_auto: false, hybrid: 0.0, ..*self };
             return super::hybrid_pilot::render(&chains, self.max_depth, scene, settings, control, |c, s, cx| {
@@ -158,12 +173,15 @@ impl Integrator for MmltIntegrator {
             .with_sample_share(self.sample_share)
             .with_measured_efficiency(self.measure_efficiency)
             .with_bridge_above(self.bridge_above);
-        let target = |depth| DepthTarget { scene, depth };
-        let start = |cx: crate::mcmc::StartContext| {
-            let k = cx.group.k;
-            Single::start(cx, target(k))
-        };
-        chains.render(scene, settings, control, depths, target, start, None)
+        let shaping = (self.importance_pilot, self.importance_floor);
+        super::importance_pilot::render(shaping, self.max_depth, scene, settings, control, |importance, s, c| {
+            let target = |depth| DepthTarget { scene, depth, importance };
+            let start = |cx: crate::mcmc::StartContext| {
+                let k = cx.group.k;
+                Single::start(cx, target(k))
+            };
+            chains.render(scene, s, c, depths, target, start, None)
+        })
     }
 
     fn memory_estimate(&self, scene: &Scene, _threads: usize) -> u64 {

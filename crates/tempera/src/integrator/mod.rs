@@ -4,6 +4,7 @@
 
 pub mod bdpt;
 pub mod hybrid_pilot;
+pub mod importance_pilot;
 pub mod memory;
 pub mod mmlt;
 pub mod path;
@@ -21,6 +22,8 @@ mod clamp_tests;
 mod efficiency_tests;
 #[cfg(test)]
 mod hybrid_tests;
+#[cfg(test)]
+mod importance_tests;
 #[cfg(test)]
 mod layer_tests;
 #[cfg(test)]

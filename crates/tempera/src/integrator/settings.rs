@@ -223,6 +223,14 @@ pub struct IntegratorSettings {
     /// non-zero values (0: never).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_clamp: Option<f64>,
+    /// MMLT and tempered MMLT: samples per pixel of the BDPT pilot whose image shapes the
+    /// chains' targets per pixel (0: no shaping).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub importance_pilot: Option<u32>,
+    /// MMLT and tempered MMLT with `importance_pilot`: the floor of the per-pixel shaping as a
+    /// fraction of the pilot image's mean.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub importance_floor: Option<f64>,
     /// MMLT: samples of bidirectional path tracing per main-chain mutation, combined with the
     /// chains by multiple importance sampling (0: the chains alone).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -370,6 +378,8 @@ impl IntegratorSettings {
             ("independent_below", self.independent_below.is_some(), kind == Mmlt || tempered),
             ("normaliser_share", self.normaliser_share.is_some(), kind == Mmlt || tempered),
             ("target_clamp", self.target_clamp.is_some(), kind == Mmlt),
+            ("importance_pilot", self.importance_pilot.is_some(), kind == Mmlt || tempered),
+            ("importance_floor", self.importance_floor.is_some(), kind == Mmlt || tempered),
             ("hybrid", self.hybrid.is_some(), kind == Mmlt || tempered),
             ("chain_efficiency", self.chain_efficiency.is_some(), kind == Mmlt || tempered),
             ("hybrid_share", self.hybrid_share.is_some(), kind == Mmlt || tempered),
@@ -462,6 +472,10 @@ impl IntegratorSettings {
         }
         if self.target_clamp.is_some_and(|c| !(c == 0.0 || (1.0..=1e9).contains(&c))) {
             return Err("target_clamp must be 0 (never) or between 1 and 1e9".into());
+        }
+        check_range("importance_pilot", self.importance_pilot, 0..=1024)?;
+        if self.importance_floor.is_some_and(|f| !(f > 0.0 && f <= 100.0)) {
+            return Err("importance_floor must be above 0 and at most 100".into());
         }
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
         if self.flattening == Some(Flattening::Power) && self.max_temperature.is_some_and(|t| t > 1.0) {

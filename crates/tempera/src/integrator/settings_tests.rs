@@ -41,6 +41,21 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
         (IntegratorKind::Pssmlt, IntegratorSettings { sigma: Some(f32::NAN), ..Default::default() }, "sigma must lie"),
         (IntegratorKind::Bdpt, IntegratorSettings { sigma: Some(0.02), ..Default::default() }, "sigma is not"),
         (
+            IntegratorKind::Mmlt,
+            IntegratorSettings { importance_pilot: Some(2000), ..Default::default() },
+            "importance_pilot",
+        ),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { importance_floor: Some(0.0), ..Default::default() },
+            "floor must",
+        ),
+        (
+            IntegratorKind::Pssmlt,
+            IntegratorSettings { importance_pilot: Some(4), ..Default::default() },
+            "importance_pilot is not",
+        ),
+        (
             IntegratorKind::Tempered,
             IntegratorSettings { max_temperature: Some(0.5), ..Default::default() },
             "max_temperature must lie",

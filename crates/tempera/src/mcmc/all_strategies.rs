@@ -12,7 +12,10 @@
 //! counts as the chains count it: zero where NaN, infinite or negative. Where the chains'
 //! target is clamped at `c` ([`super::ChainSettings::clamp`]), the one-strategy value `n·Y_s`
 //! is clamped as it is, and the estimate `Σ_s min(n·Y_s, c)/n` has the clamped target's mean.
+//! Where an [`ImportanceMap`] shapes the target, each `Y_s` is first multiplied by the map's
+//! factor where the strategy's contribution lands, as the chains' values are.
 
+use super::importance::ImportanceMap;
 use super::{Moments, NormaliserMoments, target_value, valid_radiance};
 use crate::bidir::{Heuristic, Paths, camera_subpath_vertices, connect, light_subpath_vertices};
 use crate::math::rng::hash;
@@ -24,13 +27,13 @@ use rayon::prelude::*;
 /// The lower-variance estimator of depth `k`'s normalisation that MMLT's targets use: points
 /// on the emitters connected to the camera at depth 0 ([`super::direct`]; none with an
 /// environment light), every strategy at once beyond, for a target clamped at `clamp` (infinite:
-/// none; depth 0's target is never clamped).
+/// none; depth 0's target is never clamped) and shaped by `importance` (depth 0's never is).
 pub fn depth_normaliser(
     scene: &Scene,
     k: usize,
     seed: u64,
     samples: usize,
-    clamp: f32,
+    (clamp, importance): (f32, Option<&ImportanceMap>),
 ) -> Option<(NormaliserMoments, u64)> {
     if k == 0 {
         debug_assert!(clamp.is_infinite(), "depth 0's normaliser cannot estimate a clamped target");
@@ -38,19 +41,26 @@ pub fn depth_normaliser(
         super::direct::direct_emission(scene, seed, samples)
             .map(|(moments, rays)| (NormaliserMoments { moments, one_sample_sum2: None }, rays))
     } else {
-        Some(all_strategies(scene, k, seed, samples, clamp))
+        Some(all_strategies(scene, k, seed, samples, (clamp, importance)))
     }
 }
 
 /// `samples` all-strategy estimates of `b_k` for depth `k ≥ 1` (seeded by `seed`) under the
-/// target clamped at `clamp` (infinite: none): their moments, with the second moment of MMLT's
-/// one-strategy value given each sample ([`NormaliserMoments`]), and the rays traced.
-pub fn all_strategies(scene: &Scene, k: usize, seed: u64, samples: usize, clamp: f32) -> (NormaliserMoments, u64) {
+/// target clamped at `clamp` (infinite: none) and shaped by `importance`: their moments, with
+/// the second moment of MMLT's one-strategy value given each sample ([`NormaliserMoments`]),
+/// and the rays traced.
+pub fn all_strategies(
+    scene: &Scene,
+    k: usize,
+    seed: u64,
+    samples: usize,
+    (clamp, importance): (f32, Option<&ImportanceMap>),
+) -> (NormaliserMoments, u64) {
     let values: Vec<(f64, f64, u64)> = (0..samples)
         .into_par_iter()
         .map_init(Paths::default, |paths, i| {
             let mut sampler = IndependentSampler::new(hash(&[seed, 0xa115, k as u64, i as u64]), k as u64);
-            sample(scene, k, &mut sampler, paths, clamp)
+            sample(scene, k, &mut sampler, paths, (clamp, importance))
         })
         .collect();
     let (mut moments, mut one_sample_sum2) = (Moments::default(), 0.0);
@@ -64,12 +74,19 @@ pub fn all_strategies(scene: &Scene, k: usize, seed: u64, samples: usize, clamp:
 /// One estimate: the sum over the strategies of depth `k` of their MIS-weighted luminance
 /// `Y_s`; the second moment `n Σ_s Y_s²` of MMLT's target `n·Y_s` (one of the `n = k + 2`
 /// strategies picked uniformly) on the same subpaths; and the rays traced. With a finite
-/// `clamp`, each `Y_s` is `min(n·Y_s, clamp)/n`.
-fn sample(scene: &Scene, k: usize, sampler: &mut IndependentSampler, paths: &mut Paths, clamp: f32) -> (f64, f64, u64) {
+/// `clamp`, each `Y_s` is `min(n·Y_s, clamp)/n`; with an `importance` map, `Y_s` is first
+/// multiplied by its factor where the contribution lands.
+fn sample(
+    scene: &Scene,
+    k: usize,
+    sampler: &mut IndependentSampler,
+    paths: &mut Paths,
+    (clamp, importance): (f32, Option<&ImportanceMap>),
+) -> (f64, f64, u64) {
     let (mut sum, mut sum2) = (0.0, 0.0);
     let n = (k + 2) as f64;
-    let rays = each_strategy(scene, k, sampler, paths, |_, l| {
-        let y = f64::from(target_value(luminance(l)));
+    let rays = each_strategy(scene, k, sampler, paths, |p, l| {
+        let y = f64::from(target_value(luminance(l) * ImportanceMap::of(importance, k, p)));
         let y = if clamp.is_finite() { (n * y).min(f64::from(clamp)) / n } else { y };
         sum += y;
         sum2 += y * y;
@@ -166,7 +183,7 @@ mod tests {
             for k in 1..=4 {
                 let n = 200_000;
                 let one = mmlt_target_moments(&scene, k, 9, n);
-                let (all, _) = all_strategies(&scene, k, 9, n, f32::INFINITY);
+                let (all, _) = all_strategies(&scene, k, 9, n, (f32::INFINITY, None));
                 let (ea, eb) = assert_same_mean(&format!("{name} depth {k}"), &one, &all.moments);
                 let measured = all.target_variance().unwrap();
                 let (mean_all, _) = all.moments.mean_and_rel_se();

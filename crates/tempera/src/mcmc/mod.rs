@@ -16,6 +16,7 @@ pub mod efficiency;
 pub mod full;
 pub mod hybrid;
 mod hybrid_plan;
+pub mod importance;
 pub mod independent;
 pub mod normaliser;
 pub mod stats;

@@ -5,6 +5,7 @@
 
 use super::State;
 use super::chain::{EvalContext, GroupValue};
+use super::importance::ImportanceMap;
 use crate::bidir::{Connection, Heuristic, Paths, Subpaths, camera_subpath_vertices, connect, light_subpath_vertices};
 use crate::film::SharedSplats;
 use crate::math::{Rgb, Vec2, luminance};
@@ -68,6 +69,9 @@ pub struct Evaluated {
     pub raster: Vec2,
     /// The strategy's evaluation, `None` when the subpaths could not be built or connected.
     pub connection: Option<Connection>,
+    /// The factor the target's value is multiplied by where the contribution lands
+    /// ([`ImportanceMap`]; 1 without a map).
+    pub factor: f32,
 }
 
 /// The raster position of the film sample `u` (each coordinate kept inside the film).
@@ -86,13 +90,20 @@ fn technique(k: usize, u: f32) -> (usize, usize, usize) {
 
 /// Evaluates the state of `sampler` as a path of depth `k`: the first camera-stream number
 /// chooses the technique `s = min(⌊u·(k+2)⌋, k+1)` (depth 0 has the single technique (0, 2),
-/// as in pbrt-v4), the next two the film position. The subpaths are left in `paths`.
-pub fn evaluate_connection(scene: &Scene, k: usize, cx: &mut EvalContext, paths: &mut Paths) -> Evaluated {
+/// as in pbrt-v4), the next two the film position. The subpaths are left in `paths`. With an
+/// `importance` map, the value is the target shaped by it ([`ImportanceMap`]).
+pub fn evaluate_connection(
+    scene: &Scene,
+    k: usize,
+    cx: &mut EvalContext,
+    paths: &mut Paths,
+    importance: Option<&ImportanceMap>,
+) -> Evaluated {
     let (sampler, rays) = (&mut cx.sampler, &mut cx.rays);
     sampler.start_stream(Stream::Camera);
     let (s, t, n) = technique(k, sampler.next_1d());
     let raster = raster_position(scene, sampler.next_2d());
-    let none = Evaluated { s, t, n, raster, connection: None };
+    let none = Evaluated { s, t, n, raster, connection: None, factor: 1.0 };
     paths.camera.clear();
     if t > 1 {
         // The lens sample only where a camera ray is generated.
@@ -111,25 +122,36 @@ pub fn evaluate_connection(scene: &Scene, k: usize, cx: &mut EvalContext, paths:
         }
     }
     let connection = connect(scene, paths.subpaths(), (s, t), sampler, Heuristic::Power, rays);
-    Evaluated { connection, ..none }
+    Evaluated { connection, ..none }.shaped(k, importance)
 }
 
 impl Evaluated {
+    /// The film position the contribution lands on: the camera ray's, or where light tracing
+    /// (`t = 1`) reached the film.
+    pub fn landing(&self) -> Vec2 {
+        match (self.t, self.connection.as_ref().and_then(|c| c.raster)) {
+            (1, Some(r)) => r,
+            _ => self.raster,
+        }
+    }
+
+    /// The evaluation with the factor `importance` gives depth `k` where it lands.
+    fn shaped(self, k: usize, importance: Option<&ImportanceMap>) -> Self {
+        Self { factor: ImportanceMap::of(importance, k, self.landing()), ..self }
+    }
+
     /// The contribution of the strategy with unweighted value `l` and MIS weight `weight`:
-    /// `n·w·l` at the state's film position (or where light tracing reached the film); an
-    /// invalid value (NaN, infinite or negative) gives a zero contribution marked invalid.
+    /// `n·w·l` at the state's film position (or where light tracing reached the film), valued
+    /// as its luminance times [`Self::factor`]; an invalid value (NaN, infinite or negative)
+    /// gives a zero contribution marked invalid.
     pub fn contribution(&self, l: Rgb, weight: f32) -> Contribution {
         let zero = Contribution { technique: self.s, ..Contribution::ZERO };
         let l = l * (weight * self.n as f32);
-        let f = luminance(l);
+        let f = luminance(l) * self.factor;
         if !valid_radiance(l) || !f.is_finite() {
             return Contribution { invalid: true, ..zero };
         }
-        let raster = match (self.t, self.connection.as_ref().and_then(|c| c.raster)) {
-            (1, Some(r)) => r,
-            _ => self.raster,
-        };
-        Contribution { l, raster, f: f.max(0.0), technique: self.s, invalid: false }
+        Contribution { l, raster: self.landing(), f: f.max(0.0), technique: self.s, invalid: false }
     }
 
     /// The contribution of the evaluated strategy (zero when it could not be connected).
@@ -155,8 +177,15 @@ impl Evaluated {
 /// the order the streams are read in either, so this is the value a fresh sampler of the
 /// same state gives at each depth. A depth's rays are those its own evaluation would trace:
 /// the walks' rays up to its prefixes (a walk traces one ray per vertex after its first, and one
-/// more where it ends early), and its connection's.
-pub fn evaluate_depths(scene: &Scene, depths: usize, cx: &mut EvalContext, out: &mut Vec<GroupValue>) -> u64 {
+/// more where it ends early), and its connection's. `importance` shapes the values as
+/// [`evaluate_connection`]'s.
+pub fn evaluate_depths(
+    scene: &Scene,
+    depths: usize,
+    cx: &mut EvalContext,
+    out: &mut Vec<GroupValue>,
+    importance: Option<&ImportanceMap>,
+) -> u64 {
     out.clear();
     let mut paths = std::mem::take(&mut cx.paths);
     let (sampler, rays) = (&mut cx.sampler, &mut cx.rays);
@@ -183,7 +212,7 @@ pub fn evaluate_depths(scene: &Scene, depths: usize, cx: &mut EvalContext, out: 
     // The rays a walk of `len` vertices (of the first `traced` rays in all) spends on a prefix of
     // `n` vertices.
     let prefix_rays = |n: usize, len: usize, traced: u64| if n > len { traced } else { traced.min(n as u64 - 1) };
-    for (s, t, n) in techniques {
+    for (k, (s, t, n)) in techniques.enumerate() {
         let mut own = 0;
         let camera_built = t <= 1 || paths.camera.len() >= t;
         if t > 1 {
@@ -195,7 +224,7 @@ pub fn evaluate_depths(scene: &Scene, depths: usize, cx: &mut EvalContext, out: 
         if s > 1 && camera_built {
             own += prefix_rays(s, paths.light.len(), light_rays);
         }
-        let none = Evaluated { s, t, n, raster, connection: None };
+        let none = Evaluated { s, t, n, raster, connection: None, factor: 1.0 };
         let e = if camera_built && (s <= 1 || paths.light.len() >= s) {
             // The subpaths the depth's own evaluation builds: none for `s ≤ 1` or `t ≤ 1`.
             let light = if s > 1 { &paths.light[..s] } else { &[] };
@@ -203,7 +232,7 @@ pub fn evaluate_depths(scene: &Scene, depths: usize, cx: &mut EvalContext, out: 
             let before = *rays;
             let connection = connect(scene, Subpaths { light, camera }, (s, t), sampler, Heuristic::Power, rays);
             own += *rays - before;
-            Evaluated { connection, ..none }
+            Evaluated { connection, ..none }.shaped(k, importance)
         } else {
             none
         };
@@ -216,9 +245,9 @@ pub fn evaluate_depths(scene: &Scene, depths: usize, cx: &mut EvalContext, out: 
 
 /// Evaluates the state of `cx.sampler` as a path of depth `k` ([`evaluate_connection`], the
 /// subpaths left in `cx.paths`).
-pub fn evaluate(scene: &Scene, k: usize, cx: &mut EvalContext) -> Contribution {
+pub fn evaluate(scene: &Scene, k: usize, cx: &mut EvalContext, importance: Option<&ImportanceMap>) -> Contribution {
     let mut paths = std::mem::take(&mut cx.paths);
-    let e = evaluate_connection(scene, k, cx, &mut paths);
+    let e = evaluate_connection(scene, k, cx, &mut paths, importance);
     cx.paths = paths;
     e.untempered()
 }
@@ -249,7 +278,7 @@ mod tests {
             assert!(main.values_groups_together());
             for i in 0..3000 {
                 let mut cx = EvalContext::new(sampler_for(17, 0, i, &settings));
-                let traced = evaluate_depths(&scene, depths, &mut cx, &mut out);
+                let traced = evaluate_depths(&scene, depths, &mut cx, &mut out, None);
                 assert_eq!(traced, cx.rays);
                 assert_eq!(out.len(), depths);
                 // Tempered MMLT's main target values them as MMLT does.
@@ -257,7 +286,7 @@ mod tests {
                 assert_eq!(main_out, out);
                 for (k, &GroupValue { value: f, invalid, rays }) in out.iter().enumerate() {
                     let mut alone = EvalContext::new(sampler_for(17, k, i, &settings));
-                    let c = evaluate(&scene, k, &mut alone);
+                    let c = evaluate(&scene, k, &mut alone, None);
                     assert_eq!(f.to_bits(), c.f.to_bits(), "{name}: sample {i}, depth {k}");
                     assert_eq!(invalid, c.invalid, "{name}: sample {i}, depth {k}");
                     assert_eq!(

@@ -98,6 +98,8 @@ pub struct TemperedTarget<'a> {
     pub temper: Tempering,
     /// The temperature `τ` (0: the scene itself).
     tau: f32,
+    /// The map shaping the target per pixel ([`super::importance`]; `None`: MMLT's).
+    pub importance: Option<&'a super::importance::ImportanceMap>,
     flattening: Flattening,
 }
 
@@ -109,9 +111,14 @@ impl<'a> TemperedTarget<'a> {
 
     /// The target of depth `depth` at temperature `tau`, flattened as `flattening` says.
     pub fn flattened(scene: &'a Scene, depth: usize, temper: Tempering, tau: f32, flattening: Flattening) -> Self {
-        let mut target = Self { scene, depth, temper, tau: 0.0, flattening };
+        let mut target = Self { scene, depth, temper, tau: 0.0, flattening, importance: None };
         target.set_temperature(tau);
         target
+    }
+
+    /// The target shaped by `importance` per pixel ([`super::importance`]).
+    pub fn with_importance(self, importance: Option<&'a super::importance::ImportanceMap>) -> Self {
+        Self { importance, ..self }
     }
 
     pub fn temperature(&self) -> f32 {
@@ -151,7 +158,7 @@ impl Target for TemperedTarget<'_> {
     /// Evaluates the state (its subpaths kept in the state itself, for the cross-evaluations).
     fn evaluate(&self, cx: &mut EvalContext, recycled: TemperedState) -> TemperedState {
         let mut out = recycled;
-        let e = evaluate_connection(self.scene, self.depth, cx, &mut out.paths);
+        let e = evaluate_connection(self.scene, self.depth, cx, &mut out.paths, self.importance);
         out.contribution = e.untempered();
         out.evaluated = Some(e);
         out.cross.clear();
@@ -161,7 +168,7 @@ impl Target for TemperedTarget<'_> {
 
     /// As MMLT normalises the depth: replica 0's target is MMLT's.
     fn normaliser(&self, seed: u64, samples: usize, clamp: f32) -> Option<(super::NormaliserMoments, u64)> {
-        super::all_strategies::depth_normaliser(self.scene, self.depth, seed, samples, clamp)
+        super::all_strategies::depth_normaliser(self.scene, self.depth, seed, samples, (clamp, self.importance))
     }
 
     /// The main target's depth: the scene's own paths, unflattened.
@@ -181,7 +188,7 @@ impl Target for TemperedTarget<'_> {
     }
 
     fn value_groups(&self, cx: &mut EvalContext, groups: usize, out: &mut Vec<crate::mcmc::GroupValue>) -> u64 {
-        super::evaluate_depths(self.scene, groups, cx, out)
+        super::evaluate_depths(self.scene, groups, cx, out, self.importance)
     }
 }
 
@@ -211,7 +218,7 @@ mod tests {
                 let fresh = || EvalContext::new(PssSampler::new(i, 0, 0.01, 0.3));
                 let mut state = target(depth, ladder[j]).evaluate(&mut fresh(), TemperedState::default());
                 // Replica 0's view is MMLT's target, bit for bit.
-                let mmlt = evaluate(&scene, depth, &mut fresh());
+                let mmlt = evaluate(&scene, depth, &mut fresh(), None);
                 assert_eq!(state.contribution, mmlt);
                 // Re-evaluating the cached state under its own target reproduces its value.
                 let cached = state.value;

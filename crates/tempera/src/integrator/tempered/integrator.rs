@@ -12,6 +12,7 @@ use super::{
     Ensemble, EnsembleSettings, EquiEnergy, Neighbor, Permutation, Replicas, SwapKernel, Tuning, TuningMethod,
 };
 use crate::bidir::{Heuristic, Tempering};
+use crate::integrator::importance_pilot;
 use crate::integrator::mmlt::DepthTarget;
 use crate::integrator::{
     BdptIntegrator, Budget, Integrator, LadderTuning, RenderControl, RenderOutput, RenderSettings, ReplicaSplats, Swap,
@@ -19,6 +20,7 @@ use crate::integrator::{
 use crate::math::rng::{Pcg32, hash};
 use crate::mcmc::acceptance::independent_acceptance;
 use crate::mcmc::bootstrap::count_nonzero;
+use crate::mcmc::importance::ImportanceMap;
 use crate::mcmc::{Bootstraps, ChainSettings, Flattening, Single, StartContext, TemperedTarget};
 use crate::scene::Scene;
 use std::time::{Duration, Instant};
@@ -127,6 +129,11 @@ pub struct TemperedIntegrator {
     /// of each sample, then wins at equal time (`None`: never; nor with `hybrid`, per-depth
     /// images or the chains' efficiency measured, which are the chains' own).
     pub bdpt_above: Option<f64>,
+    /// Samples per pixel of the BDPT pilot whose image shapes the chains' targets per pixel
+    /// where the chains render ([`crate::mcmc::importance`]; 0: no shaping).
+    pub importance_pilot: u32,
+    /// The shaping's floor `φ` as a fraction of the pilot image's mean.
+    pub importance_floor: f64,
 }
 
 /// [`TemperedIntegrator::bdpt_above`]'s default: between the scenes where the chains were
@@ -185,6 +192,8 @@ impl TemperedIntegrator {
             independent_below: 40,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
             bdpt_above: Some(DEFAULT_BDPT_ABOVE),
+            importance_pilot: 0,
+            importance_floor: crate::mcmc::importance::DEFAULT_FLOOR,
         }
     }
 
@@ -211,6 +220,7 @@ impl TemperedIntegrator {
             bridge_above: None,
             bdpt_above: None,
             hybrid: 0.0,
+            importance_pilot: 0,
             ..Self::new(max_depth)
         }
     }
@@ -261,17 +271,27 @@ impl TemperedIntegrator {
 
     /// Walker `cx.c` of depth `cx.k`: at a plain depth ([`Self::ensembles_below`]) MMLT's
     /// chain, else an ensemble.
-    fn start_walker<'a>(&self, scene: &'a Scene, ladder: &[f32], cx: StartContext) -> TemperedWalker<'a> {
+    fn start_walker<'a>(
+        &self,
+        (scene, importance): (&'a Scene, Option<&'a ImportanceMap>),
+        ladder: &[f32],
+        cx: StartContext,
+    ) -> TemperedWalker<'a> {
         let k = cx.group.k;
         if k == 0 || self.plain_depth(cx.bootstrap) {
-            return TemperedWalker::Plain(Box::new(Single::start(cx, DepthTarget { scene, depth: k })));
+            return TemperedWalker::Plain(Box::new(Single::start(cx, DepthTarget { scene, depth: k, importance })));
         }
-        TemperedWalker::Ensemble(Box::new(self.start_ensemble(scene, ladder, cx)))
+        TemperedWalker::Ensemble(Box::new(self.start_ensemble((scene, importance), ladder, cx)))
     }
 
     /// Ensemble `cx.c` of depth `cx.k`: replica 0 starts exactly as an MMLT chain, the others
     /// draw their own start states (until the depth's preparation restarts them all).
-    fn start_ensemble<'a>(&self, scene: &'a Scene, ladder: &[f32], cx: StartContext) -> Ensemble<'a> {
+    fn start_ensemble<'a>(
+        &self,
+        (scene, importance): (&'a Scene, Option<&'a ImportanceMap>),
+        ladder: &[f32],
+        cx: StartContext,
+    ) -> Ensemble<'a> {
         let (k, c, seed) = (cx.group.k, cx.c, cx.group.seed);
         let kernel = match self.swap {
             // The mixture's chains never swap.
@@ -281,7 +301,8 @@ impl TemperedIntegrator {
         };
         let mut replicas = Replicas { chains: Vec::with_capacity(ladder.len()), targets: Vec::new() };
         for (j, &a) in ladder.iter().enumerate() {
-            let target = TemperedTarget::flattened(scene, k, self.tempering(), a, self.flattening);
+            let target =
+                TemperedTarget::flattened(scene, k, self.tempering(), a, self.flattening).with_importance(importance);
             let rng =
                 if j == 0 { cx.rng.clone() } else { Pcg32::new(hash(&[seed, 0x7e4b, k as u64, c as u64]), j as u64) };
             let mut chain = cx.start_chain(&target, rng);
@@ -324,6 +345,7 @@ impl Integrator for TemperedIntegrator {
         settings: &RenderSettings,
         control: &RenderControl,
     ) -> Result<RenderOutput, String> {
+        importance_pilot::check(self.importance_pilot, self.hybrid > 0.0 || self.hybrid_auto, self.measure_efficiency)?;
         if self.hybrid_auto {
             if self.swap == Swap::Mixture {
                 return Err("--hybrid auto needs replica 0 alone writing the image: no mixture chains".into());
@@ -355,13 +377,26 @@ impl Integrator for TemperedIntegrator {
         control.check_memory(bytes, "a splat buffer per path depth and contributing replica")?;
         let chains = self.chain_settings();
         let ladder = self.ladder();
-        let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         let depths = self.max_depth as usize + 1;
-        let start = |cx: StartContext| self.start_walker(scene, &ladder, cx);
+        let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
+        // The chains, shaped per pixel by a pilot where asked (their bootstrap then drawn anew
+        // under the shaped targets).
+        let shaping = (self.importance_pilot, self.importance_floor);
+        let render_chains = |rest: &RenderSettings, control: &RenderControl, boots: Option<Bootstraps>| {
+            if self.importance_pilot == 0 {
+                let start = |cx: StartContext| self.start_walker((scene, None), &ladder, cx);
+                return chains.render(scene, rest, control, depths, main, start, boots);
+            }
+            importance_pilot::render(shaping, self.max_depth, scene, rest, control, |importance, s, c| {
+                let main = |depth| main(depth).with_importance(importance);
+                let start = |cx: StartContext| self.start_walker((scene, importance), &ladder, cx);
+                chains.render(scene, s, c, depths, main, start, None)
+            })
+        };
         // Per-depth images and the chains' measured efficiency are the chains' own.
         let choose = self.hybrid == 0.0 && !self.depth_images && !self.measure_efficiency;
         let Some(above) = self.bdpt_above.filter(|_| choose) else {
-            return chains.render(scene, settings, control, depths, main, start, None);
+            return render_chains(settings, control, None);
         };
         // The bootstrap first, to choose by; the render then gets the rest of a time budget
         // (its snapshots as much earlier), and the chains reuse the bootstrap.
@@ -382,7 +417,7 @@ impl Integrator for TemperedIntegrator {
             out.stats.rays += bootstrap_rays;
             out
         } else {
-            chains.render(scene, &rest, &control, depths, main, start, Some(bootstraps))?
+            render_chains(&rest, &control, Some(bootstraps))?
         };
         out.stats.seconds += spent.as_secs_f64();
         if let Some(first) = out.chains.first_mut() {
