@@ -60,7 +60,7 @@ pub struct IntegratorFlags {
     #[arg(long, value_name = "N")]
     pub importance_pilot: Option<u32>,
     /// MMLT and tempered MMLT with --importance-pilot: pixels darker than F times the pilot
-    /// image's mean get fewer mutations, in proportion to their brightness (default 0.25)
+    /// image's mean get fewer mutations, in proportion to their brightness (default 0.5)
     #[arg(long, value_name = "F")]
     pub importance_floor: Option<f64>,
     /// MMLT and tempered MMLT: R samples of bidirectional path tracing per main-chain

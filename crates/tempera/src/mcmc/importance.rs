@@ -28,7 +28,7 @@
 use crate::math::Vec2;
 
 /// The floor `φ` over the pilot image's mean unless the render says otherwise.
-pub const DEFAULT_FLOOR: f64 = 0.25;
+pub const DEFAULT_FLOOR: f64 = 0.5;
 
 /// The factor `1/ψ(p)` a depth `k ≥ 1` state's value is multiplied by, per pixel.
 #[derive(Clone, Debug, PartialEq)]
