@@ -70,6 +70,11 @@ def test_a_pbrt_mlt_file_sets_the_mutations_per_pixel(tmp_path):
         ("bdpt", ["--spp", "2"], {"spp": 2}),
         ("mmlt", ["--mpp", "2", "--bootstrap", "3000"], {"mpp": 2, "bootstrap": 3000}),
         (
+            "mmlt",
+            ["--mpp", "2", "--bootstrap", "3000", "--importance-pilot", "2", "--importance-floor", "0.3"],
+            {"mpp": 2, "bootstrap": 3000, "importance_pilot": 2, "importance_floor": 0.3},
+        ),
+        (
             "tempered",
             ["--mpp", "2", "--bootstrap", "3000", "--replicas", "3", "--swap", "equi-energy"],
             {"mpp": 2, "bootstrap": 3000, "replicas": 3, "swap": "equi-energy"},
