@@ -3,7 +3,8 @@
 //! path tracing (a seed of their own, the render's depth), whose luminance gives the map; the
 //! chains then render under the rest of a time budget (their snapshots as much earlier), or
 //! under the whole of a fixed one. The pilot's samples are a fixed count, so the map, and the
-//! image, are the same at any thread count. Its image is not part of the render's; its time and
+//! image, are the same at any thread count. Its image is not part of the render's (unless the
+//! render is interrupted before the chains begin: then it is the image there is); its time and
 //! rays are counted in the render's statistics.
 
 use super::{BdptIntegrator, Budget, Integrator, RenderControl, RenderOutput, RenderSettings};
@@ -54,6 +55,10 @@ pub fn render(
         &RenderSettings { budget: Budget::Samples(spp), seed, ..*settings },
         &pilot_control,
     )?;
+    if pilot.stats.cancelled {
+        // Interrupted before the chains began: the pilot's image is the render's.
+        return Ok(pilot);
+    }
     let luminance: Vec<f32> = pilot.image.pixels.iter().map(|&p| crate::math::luminance(p)).collect();
     let map = ImportanceMap::from_pilot(pilot.image.width, pilot.image.height, &luminance, floor);
     let spent = start.elapsed();
