@@ -219,29 +219,13 @@ pub fn choose(
             0.5 * (v[1] + v[2])
         })
         .collect();
-    let reference: Vec<f32> = (0..w * h)
-        .map(|j| {
-            let (x, y) = (j % w, j / w);
-            let (mut sum, mut n) = (0.0, 0.0);
-            for yy in y.saturating_sub(1)..(y + 2).min(h) {
-                for xx in x.saturating_sub(1)..(x + 2).min(w) {
-                    sum += median[yy * w + xx];
-                    n += 1.0;
-                }
-            }
-            sum / n
-        })
-        .collect();
+    let reference = crate::mcmc::importance::neighbourhood(w, h, &median, |v| v.iter().sum::<f32>() / v.len() as f32);
     let rho = samples.variance(&reference) / walks.variance(&reference);
     let seconds = start.elapsed().as_secs_f64();
     let choice = HybridChoice::from_ratio(rho, (samples.rate(), walks.rate()), seconds);
-    let budget = match settings.budget {
-        // At least half the budget: a pilot that overran it (budgets of a second or less,
-        // where the chains' bootstrap alone takes longer) makes the render late, not empty.
-        Budget::Time(t) => Budget::Time(t.saturating_sub(start.elapsed()).max(t / 2)),
-        fixed => fixed,
-    };
-    Ok((choice, RenderSettings { budget, ..*settings }))
+    // A pilot that overran its share (budgets of a second or less, where the chains' bootstrap
+    // alone takes longer) leaves half.
+    Ok((choice, RenderSettings { budget: settings.budget.after_pilot(start.elapsed()), ..*settings }))
 }
 
 /// Renders by the pilot's choice: the pilot by `chains`, then `main` with the choice, under
@@ -257,7 +241,7 @@ pub fn render(
 ) -> Result<RenderOutput, String> {
     let (choice, rest) = choose(chains, max_depth, scene, settings, control)?;
     let pilot = Duration::from_secs_f64(choice.seconds);
-    let snapshots: Vec<Duration> = control.snapshots.iter().map(|t| t.saturating_sub(pilot)).collect();
+    let snapshots = super::snapshots_after(control.snapshots, pilot);
     let control = RenderControl { snapshots: &snapshots, ..*control };
     let mut out = if choice.bdpt_alone() {
         let budget = match rest.budget {

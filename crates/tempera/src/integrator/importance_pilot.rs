@@ -10,7 +10,7 @@
 use super::{BdptIntegrator, Budget, Integrator, RenderControl, RenderOutput, RenderSettings};
 use crate::mcmc::importance::ImportanceMap;
 use crate::scene::Scene;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Whether a render with a pilot of `spp` samples per pixel may also combine its chains with
 /// BDPT (`hybrid`) or measure their efficiency: neither yet, because both weigh the chains'
@@ -62,14 +62,10 @@ pub fn render(
     let luminance: Vec<f32> = pilot.image.pixels.iter().map(|&p| crate::math::luminance(p)).collect();
     let map = ImportanceMap::from_pilot(pilot.image.width, pilot.image.height, &luminance, floor);
     let spent = start.elapsed();
-    let snapshots: Vec<Duration> = control.snapshots.iter().map(|t| t.saturating_sub(spent)).collect();
+    let snapshots = super::snapshots_after(control.snapshots, spent);
     let control = RenderControl { snapshots: &snapshots, ..*control };
-    let budget = match settings.budget {
-        // At least half the budget: a pilot that overran it makes the render late, not empty.
-        Budget::Time(t) => Budget::Time(t.saturating_sub(spent).max(t / 2)),
-        fixed => fixed,
-    };
-    let mut out = main(map.as_ref(), &RenderSettings { budget, ..*settings }, &control)?;
+    let rest = RenderSettings { budget: settings.budget.after_pilot(spent), ..*settings };
+    let mut out = main(map.as_ref(), &rest, &control)?;
     out.stats.seconds += spent.as_secs_f64();
     out.stats.rays += pilot.stats.rays;
     Ok(out)

@@ -36,8 +36,6 @@ fn shaped_chains_agree_with_bdpt() {
         for (i, ((ma, _), (mb, sb))) in a.iter().zip(&b).enumerate() {
             assert!((ma - mb).abs() < 4.0 * sb + 0.03 * mb, "{name}, block {i}: {ma} vs bdpt {mb} ± {sb}");
         }
-        // The pilot's rays count in the render's.
-        assert!(out.stats.rays > 0);
     }
     let unshaped = render_with(&scene, &plain, Budget::Samples(64), 2, 0);
     let one = render_with(&scene, &shaped, Budget::Samples(64), 2, 1);

@@ -61,6 +61,24 @@ pub enum Budget {
     Time(Duration),
 }
 
+impl Budget {
+    /// What a render gets once a pilot has taken `spent` of it: the rest of a time budget, but
+    /// at least half of it (a pilot that overran its share makes the render late, not empty);
+    /// a fixed budget whole.
+    pub fn after_pilot(self, spent: Duration) -> Self {
+        match self {
+            Budget::Time(t) => Budget::Time(t.saturating_sub(spent).max(t / 2)),
+            fixed => fixed,
+        }
+    }
+}
+
+/// Snapshot times `spent` earlier: those of a render that follows a preliminary of that length
+/// (a pilot, a bootstrap) and counts its own time from there.
+pub(crate) fn snapshots_after(snapshots: &[Duration], spent: Duration) -> Vec<Duration> {
+    snapshots.iter().map(|t| t.saturating_sub(spent)).collect()
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
     pub budget: Budget,

@@ -74,8 +74,8 @@ impl ImportanceMap {
     }
 }
 
-/// Each pixel's `reduce` over its 3×3 neighbourhood (cut at the film's edges).
-fn neighbourhood(width: usize, height: usize, v: &[f32], reduce: impl Fn(&mut Vec<f32>) -> f32) -> Vec<f32> {
+/// Each pixel's `reduce` over its 3×3 neighbourhood (cut at the film's edges), row by row.
+pub(crate) fn neighbourhood(width: usize, height: usize, v: &[f32], reduce: impl Fn(&mut Vec<f32>) -> f32) -> Vec<f32> {
     let mut window = Vec::with_capacity(9);
     (0..width * height)
         .map(|j| {

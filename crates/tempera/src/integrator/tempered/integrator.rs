@@ -23,7 +23,7 @@ use crate::mcmc::bootstrap::count_nonzero;
 use crate::mcmc::importance::ImportanceMap;
 use crate::mcmc::{Bootstraps, ChainSettings, Flattening, Single, StartContext, TemperedTarget};
 use crate::scene::Scene;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Rings of the equi-energy strategy.
 const RINGS: usize = 8;
@@ -383,14 +383,12 @@ impl Integrator for TemperedIntegrator {
         // under the shaped targets).
         let shaping = (self.importance_pilot, self.importance_floor);
         let render_chains = |rest: &RenderSettings, control: &RenderControl, boots: Option<Bootstraps>| {
-            if self.importance_pilot == 0 {
-                let start = |cx: StartContext| self.start_walker((scene, None), &ladder, cx);
-                return chains.render(scene, rest, control, depths, main, start, boots);
-            }
             importance_pilot::render(shaping, self.max_depth, scene, rest, control, |importance, s, c| {
                 let main = |depth| main(depth).with_importance(importance);
                 let start = |cx: StartContext| self.start_walker((scene, importance), &ladder, cx);
-                chains.render(scene, s, c, depths, main, start, None)
+                // A bootstrap drawn under the unshaped targets serves unshaped chains only.
+                let boots = boots.filter(|_| self.importance_pilot == 0);
+                chains.render(scene, s, c, depths, main, start, boots)
             })
         };
         // Per-depth images and the chains' measured efficiency are the chains' own.
@@ -404,7 +402,7 @@ impl Integrator for TemperedIntegrator {
         let bootstraps = chains.bootstrap_groups(settings, control, depths, main)?;
         let acceptance = independent_acceptance(&bootstraps.boots);
         let spent = started.elapsed();
-        let snapshots: Vec<Duration> = control.snapshots.iter().map(|t| t.saturating_sub(spent)).collect();
+        let snapshots = crate::integrator::snapshots_after(control.snapshots, spent);
         let control = RenderControl { snapshots: &snapshots, ..*control };
         let budget = match settings.budget {
             Budget::Time(t) => Budget::Time(t.saturating_sub(spent)),
