@@ -63,6 +63,16 @@ pub struct IntegratorFlags {
     /// image's mean get fewer mutations, in proportion to their brightness (default 0.5)
     #[arg(long, value_name = "F")]
     pub importance_floor: Option<f64>,
+    /// MMLT and tempered MMLT with --importance-pilot under a time budget: the pilot stops
+    /// before it takes more than this share of the time (default 0.05; at least one sample per
+    /// pixel)
+    #[arg(long, value_name = "S")]
+    pub importance_share: Option<f64>,
+    /// MMLT and tempered MMLT with --importance-pilot: shape the chains only where the pilot's
+    /// map predicts a relMSE below R times that of MMLT's targets (default 0.5; any R above 1
+    /// nearly always shapes)
+    #[arg(long, value_name = "R")]
+    pub importance_below: Option<f64>,
     /// MMLT and tempered MMLT: R samples of bidirectional path tracing per main-chain
     /// mutation, combined with the chains by multiple importance sampling: the samples carry
     /// the dim parts of the image, the chains the bright, hard-to-find paths (default 0: the
@@ -213,6 +223,8 @@ impl IntegratorFlags {
             target_clamp: self.target_clamp,
             importance_pilot: self.importance_pilot,
             importance_floor: self.importance_floor,
+            importance_share: self.importance_share,
+            importance_below: self.importance_below,
             hybrid: self.hybrid,
             chain_efficiency: self.chain_efficiency,
             hybrid_share: self.hybrid_share,

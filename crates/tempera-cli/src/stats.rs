@@ -26,6 +26,13 @@ pub fn print_table(stats: &RunStats) {
             c.seconds, c.variance_ratio
         );
     }
+    if let Some(p) = stats.depths.first().and_then(|d| d.importance_pilot) {
+        let chose = if p.shaped { "targets shaped per pixel" } else { "MMLT's targets" };
+        eprintln!(
+            "importance pilot ({} samples per pixel, {:.1} s): predicted relMSE ratio {:.3} (--importance-below): {chose}",
+            p.spp, p.seconds, p.predicted_ratio
+        );
+    }
     let no_chains = stats.depths.iter().all(|d| d.mutations == 0);
     if let Some(a) = stats.depths.first().and_then(|d| d.independent_acceptance) {
         let chose = if no_chains { "BDPT alone" } else { "the chains" };

@@ -49,12 +49,14 @@ fn ranks_render_the_single_process_image_byte_for_byte() {
     let Some(_alone) = mpirun_alone() else { return };
     let dir = scratch("identical");
     let common = ["--resolution", "40x30", "--seed", "5", "--threads", "1", "--quiet"];
-    let runs: [(&str, &[&str]); 8] = [
+    let runs: [(&str, &[&str]); 9] = [
         ("path", &["--spp", "6"]),
         ("bdpt", &["--spp", "3"]),
         ("mmlt", &["--mpp", "4", "--bootstrap", "4000"]),
         ("mmlt", &["--mpp", "4", "--bootstrap", "4000", "--hybrid", "0.5", "--measure-efficiency"]),
         ("pssmlt", &["--mpp", "4", "--bootstrap", "4000"]),
+        // Targets shaped by a BDPT pilot drawn across the ranks, its map from rank 0's image.
+        ("mmlt", &["--mpp", "3", "--bootstrap", "4000", "--importance-pilot", "3", "--importance-below", "1000"]),
         ("tempered", &["--mpp", "3", "--bootstrap", "4000", "--ensembles-below", "0", "--bdpt-above", "inf"]),
         // The default scene's bootstrap chooses BDPT alone, at the same samples on every rank.
         ("tempered", &["--mpp", "3", "--bootstrap", "4000"]),

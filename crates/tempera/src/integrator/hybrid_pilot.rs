@@ -219,7 +219,8 @@ pub fn choose(
             0.5 * (v[1] + v[2])
         })
         .collect();
-    let reference = crate::mcmc::importance::neighbourhood(w, h, &median, |v| v.iter().sum::<f32>() / v.len() as f32);
+    let reference =
+        crate::mcmc::importance::neighbourhood(w, h, &median, 1, |v| v.iter().sum::<f32>() / v.len() as f32);
     let rho = samples.variance(&reference) / walks.variance(&reference);
     let seconds = start.elapsed().as_secs_f64();
     let choice = HybridChoice::from_ratio(rho, (samples.rate(), walks.rate()), seconds);

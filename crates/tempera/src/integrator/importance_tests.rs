@@ -20,10 +20,12 @@ fn shaped_chains_agree_with_bdpt() {
     let b = block_stats(&bdpt.image, 16);
     let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.0).sum::<f64>() / s.len() as f64;
     let plain = MmltIntegrator { bootstrap: 100_000, ..MmltIntegrator::new(5) };
-    let shaped = MmltIntegrator { importance_pilot: 4, ..plain };
+    // Shaped whatever the map predicts.
+    let shaped = MmltIntegrator { importance_pilot: 4, importance_below: 1000.0, ..plain };
     let tempered = TemperedIntegrator {
         bootstrap: 100_000,
         importance_pilot: 4,
+        importance_below: 1000.0,
         ensembles_below: 0,
         bdpt_above: None,
         ..TemperedIntegrator::new(5)
@@ -45,6 +47,15 @@ fn shaped_chains_agree_with_bdpt() {
     assert!(one.image.pixels == two.image.pixels, "a shaped render differs between thread counts");
     let none = render_with(&scene, &MmltIntegrator { importance_pilot: 0, ..shaped }, Budget::Samples(64), 2, 0);
     assert!(none.image.pixels == unshaped.image.pixels, "no pilot is not MMLT");
+    // The pilot's choice is recorded; where its map predicts less gain than asked for, the
+    // chains are MMLT's, bit for bit.
+    let chose = one.chains[0].importance_pilot.expect("the pilot's choice");
+    assert!(chose.shaped && chose.spp == 4 && chose.predicted_ratio > 0.0, "{chose:?}");
+    let declined = MmltIntegrator { importance_below: chose.predicted_ratio * 0.999, ..shaped };
+    let declined = render_with(&scene, &declined, Budget::Samples(64), 2, 0);
+    let choice = declined.chains[0].importance_pilot.expect("the pilot's choice");
+    assert!(!choice.shaped && choice.predicted_ratio == chose.predicted_ratio, "{choice:?}");
+    assert!(declined.image.pixels == unshaped.image.pixels, "a declined shaping is not MMLT");
 }
 
 /// The all-strategy normaliser of a shaped target estimates the shaped target's mean: at
@@ -57,7 +68,7 @@ fn the_shaped_normaliser_estimates_the_shaped_mean() {
     let mut scene = crate::scenes::default_scene().build().unwrap();
     scene.set_resolution(16, 16);
     let pilot: Vec<f32> = (0..256).map(|j| if j % 16 < 8 { 0.1 } else { 1.0 }).collect();
-    let map = ImportanceMap::from_pilot(16, 16, &pilot, 0.01).unwrap();
+    let map = ImportanceMap::from_pilot(16, 16, &pilot, 16, 0.01).unwrap();
     assert!(map.factor(Vec2::new(2.5, 3.5)) > 9.0 * map.factor(Vec2::new(13.5, 3.5)));
     let n = 200_000;
     for k in 1..=3 {

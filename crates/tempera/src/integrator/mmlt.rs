@@ -60,6 +60,10 @@ pub struct MmltIntegrator {
     pub importance_pilot: u32,
     /// The shaping's floor `φ` as a fraction of the pilot image's mean.
     pub importance_floor: f64,
+    /// The share of a time budget the shaping's pilot takes at most.
+    pub importance_share: f64,
+    /// The predicted relMSE ratio below which the pilot's map shapes the chains.
+    pub importance_below: f64,
 }
 
 impl MmltIntegrator {
@@ -83,6 +87,8 @@ impl MmltIntegrator {
             bridge_above: Some(crate::mcmc::bridge::DEFAULT_ABOVE),
             importance_pilot: 0,
             importance_floor: crate::mcmc::importance::DEFAULT_FLOOR,
+            importance_share: crate::integrator::importance_pilot::DEFAULT_SHARE,
+            importance_below: crate::integrator::importance_pilot::DEFAULT_BELOW,
         }
     }
 }
@@ -173,7 +179,7 @@ impl Integrator for MmltIntegrator {
             .with_sample_share(self.sample_share)
             .with_measured_efficiency(self.measure_efficiency)
             .with_bridge_above(self.bridge_above);
-        let shaping = (self.importance_pilot, self.importance_floor);
+        let shaping = self.shaping();
         super::importance_pilot::render(shaping, self.max_depth, scene, settings, control, |importance, s, c| {
             let target = |depth| DepthTarget { scene, depth, importance };
             let start = |cx: crate::mcmc::StartContext| {
@@ -194,6 +200,18 @@ impl Integrator for MmltIntegrator {
         pixels(scene)
             .saturating_mul(12 + images + (halves * depths + hybrid) * SHARED_SPLAT_BYTES)
             .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
+    }
+}
+
+impl MmltIntegrator {
+    /// How the chains' targets are shaped per pixel.
+    fn shaping(&self) -> super::importance_pilot::Shaping {
+        super::importance_pilot::Shaping {
+            spp: self.importance_pilot,
+            floor: self.importance_floor,
+            share: self.importance_share,
+            below: self.importance_below,
+        }
     }
 }
 

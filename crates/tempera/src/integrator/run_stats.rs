@@ -134,6 +134,9 @@ pub struct DepthRecord {
     /// its chains and BDPT alone (`--bdpt-above`; depth 0's row only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub independent_acceptance: Option<f64>,
+    /// What the pilot of `--importance-pilot` drew and chose (depth 0's row only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub importance_pilot: Option<super::importance_pilot::PilotChoice>,
     /// How unevenly the depth's light is spread over its paths: `sqrt(E[f²]/E[f]²)` over the
     /// bootstrap's non-zero values, capped at 8 (mutations may be allotted by `b` times it).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -240,6 +243,7 @@ impl DepthRecord {
             measured_efficiency: d.measured_efficiency,
             hybrid_pilot: d.hybrid_choice,
             independent_acceptance: d.independent_acceptance,
+            importance_pilot: d.importance_pilot,
             spread: d.spread,
             mutations: d.mutations,
             acceptance: Acceptance {

@@ -231,6 +231,14 @@ pub struct IntegratorSettings {
     /// fraction of the pilot image's mean.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub importance_floor: Option<f64>,
+    /// MMLT and tempered MMLT with `importance_pilot`: the share of a time budget the pilot
+    /// takes at most.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub importance_share: Option<f64>,
+    /// MMLT and tempered MMLT with `importance_pilot`: the chains are shaped only where the
+    /// pilot's map predicts a relMSE below this ratio to MMLT's targets'.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub importance_below: Option<f64>,
     /// MMLT: samples of bidirectional path tracing per main-chain mutation, combined with the
     /// chains by multiple importance sampling (0: the chains alone).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -380,6 +388,8 @@ impl IntegratorSettings {
             ("target_clamp", self.target_clamp.is_some(), kind == Mmlt),
             ("importance_pilot", self.importance_pilot.is_some(), kind == Mmlt || tempered),
             ("importance_floor", self.importance_floor.is_some(), kind == Mmlt || tempered),
+            ("importance_share", self.importance_share.is_some(), kind == Mmlt || tempered),
+            ("importance_below", self.importance_below.is_some(), kind == Mmlt || tempered),
             ("hybrid", self.hybrid.is_some(), kind == Mmlt || tempered),
             ("chain_efficiency", self.chain_efficiency.is_some(), kind == Mmlt || tempered),
             ("hybrid_share", self.hybrid_share.is_some(), kind == Mmlt || tempered),
@@ -476,6 +486,12 @@ impl IntegratorSettings {
         check_range("importance_pilot", self.importance_pilot, 0..=1024)?;
         if self.importance_floor.is_some_and(|f| !(f > 0.0 && f <= 100.0)) {
             return Err("importance_floor must be above 0 and at most 100".into());
+        }
+        if self.importance_share.is_some_and(|f| !(f > 0.0 && f <= 0.5)) {
+            return Err("importance_share must be above 0 and at most 0.5".into());
+        }
+        if self.importance_below.is_some_and(|f| !(f > 0.0 && f <= 1000.0)) {
+            return Err("importance_below must be above 0 and at most 1000".into());
         }
         check_range("max_temperature", self.max_temperature, 1.0..=1000.0)?;
         if self.flattening == Some(Flattening::Power) && self.max_temperature.is_some_and(|t| t > 1.0) {

@@ -51,6 +51,16 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
             "floor must",
         ),
         (
+            IntegratorKind::Mmlt,
+            IntegratorSettings { importance_share: Some(0.9), ..Default::default() },
+            "importance_share must",
+        ),
+        (
+            IntegratorKind::Bdpt,
+            IntegratorSettings { importance_share: Some(0.1), ..Default::default() },
+            "importance_share is not",
+        ),
+        (
             IntegratorKind::Pssmlt,
             IntegratorSettings { importance_pilot: Some(4), ..Default::default() },
             "importance_pilot is not",

@@ -16,8 +16,10 @@
 //! sum of `Var_p/(Ī_p² + φ²)`, relMSE with `φ²` as its `ε`.
 //!
 //! `Ī` comes from a short bidirectional path tracing pilot ([`ImportanceMap::from_pilot`]):
-//! per pixel the largest value of its 3×3 neighbourhood, averaged over the 3×3 neighbourhood
-//! again. `φ` is `floor` times the pilot's mean. The map errs towards bright: a pixel the pilot
+//! each pixel's value averaged over the smallest square around it that holds
+//! [`WINDOW_SAMPLES`] of the pilot's samples (the pixel alone at 16 samples per pixel, 3×3 at
+//! 2–15, 5×5 at one), then per pixel the largest value of its 3×3 neighbourhood, averaged over
+//! the 3×3 neighbourhood again. `φ` is `floor` times the pilot's mean. The map errs towards bright: a pixel the pilot
 //! overestimates gets fewer mutations than it should, and only its own noise grows; one it
 //! underestimates (a glint the pilot missed) gets a target far above its neighbours', where
 //! the chains that find it stay and pile up its light, and the depth's normalisation, a mean of
@@ -30,31 +32,56 @@ use crate::math::Vec2;
 /// The floor `φ` over the pilot image's mean unless the render says otherwise.
 pub const DEFAULT_FLOOR: f64 = 0.5;
 
+/// The pilot's samples each pixel's value is first averaged over, at least: its own where the
+/// pilot took this many per pixel, its neighbours' too where it took fewer.
+pub const WINDOW_SAMPLES: u32 = 16;
+
+/// The `ε` of relMSE, `(I − R)²/(R² + ε)`, in the model of [`ImportanceMap::predicted_ratio`].
+pub const RELMSE_EPSILON: f64 = 0.01;
+
 /// The factor `1/ψ(p)` a depth `k ≥ 1` state's value is multiplied by, per pixel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImportanceMap {
     width: usize,
     height: usize,
     factor: Vec<f32>,
+    /// [`Self::predicted_ratio`].
+    predicted: f64,
 }
 
 impl ImportanceMap {
-    /// The map for a pilot image's pixel luminances (`width × height`, row by row) with the
-    /// floor `φ = floor · mean`; `None` if the pilot saw no light (or `floor` is not positive).
-    pub fn from_pilot(width: usize, height: usize, luminance: &[f32], floor: f64) -> Option<Self> {
+    /// The map for a pilot image's pixel luminances (`width × height`, row by row) from `spp`
+    /// samples per pixel, with the floor `φ = floor · mean`; `None` if the pilot saw no light
+    /// (or `floor` is not positive).
+    pub fn from_pilot(width: usize, height: usize, luminance: &[f32], spp: u32, floor: f64) -> Option<Self> {
         if width == 0 || height == 0 || luminance.len() != width * height || floor.is_nan() || floor <= 0.0 {
             return None;
         }
         let clean: Vec<f32> = luminance.iter().map(|&y| if y.is_finite() && y > 0.0 { y } else { 0.0 }).collect();
-        let largest = neighbourhood(width, height, &clean, |v| v.iter().copied().fold(0.0, f32::max));
-        let smooth = neighbourhood(width, height, &largest, |v| v.iter().sum::<f32>() / v.len() as f32);
+        let mean = |v: &mut Vec<f32>| v.iter().sum::<f32>() / v.len() as f32;
+        let radius = window_radius(spp);
+        let denoised = if radius == 0 { clean } else { neighbourhood(width, height, &clean, radius, mean) };
+        let largest = neighbourhood(width, height, &denoised, 1, |v| v.iter().copied().fold(0.0, f32::max));
+        let smooth = neighbourhood(width, height, &largest, 1, mean);
         let mean = smooth.iter().map(|&y| f64::from(y)).sum::<f64>() / smooth.len() as f64;
         let phi = floor * mean;
         if !(phi > 0.0 && phi.is_finite()) {
             return None;
         }
-        let factor = smooth.iter().map(|&y| (1.0 / (f64::from(y).powi(2) + phi * phi).sqrt()) as f32).collect();
-        Some(Self { width, height, factor })
+        let factor: Vec<f32> =
+            smooth.iter().map(|&y| (1.0 / (f64::from(y).powi(2) + phi * phi).sqrt()) as f32).collect();
+        let predicted = predicted_ratio(&smooth, &factor);
+        Some(Self { width, height, factor, predicted })
+    }
+
+    /// The relMSE of chains under this map over that of MMLT's chains, as the model of the
+    /// module's documentation predicts it from the map's own brightness `Ī`: with `n_p ∝ Ī_p/ψ_p`
+    /// mutations (MMLT: `n_p ∝ Ī_p`) and per-pixel variance `Ī_p²/n_p`, relMSE is proportional to
+    /// `Σ_p (Ī_p/ψ_p) · Σ_p Ī_p ψ_p/(Ī_p² + ε)` (MMLT: `Σ_p Ī_p · Σ_p Ī_p/(Ī_p² + ε)`), `ε` being
+    /// relMSE's [`RELMSE_EPSILON`] in the image's units. Near 1 where the image's brightness is
+    /// even (the shaping has little to move), small where most pixels are far dimmer than a few.
+    pub fn predicted_ratio(&self) -> f64 {
+        self.predicted
     }
 
     /// The factor at raster position `raster` (clamped to the film).
@@ -74,15 +101,46 @@ impl ImportanceMap {
     }
 }
 
-/// Each pixel's `reduce` over its 3×3 neighbourhood (cut at the film's edges), row by row.
-pub(crate) fn neighbourhood(width: usize, height: usize, v: &[f32], reduce: impl Fn(&mut Vec<f32>) -> f32) -> Vec<f32> {
-    let mut window = Vec::with_capacity(9);
+/// [`ImportanceMap::predicted_ratio`] for the smoothed brightness `bright` and the factors
+/// `1/ψ`; 1 (no gain) where the image is black.
+fn predicted_ratio(bright: &[f32], factor: &[f32]) -> f64 {
+    let (mut shaped_n, mut shaped_v, mut plain_n, mut plain_v) = (0.0, 0.0, 0.0, 0.0);
+    for (&y, &f) in bright.iter().zip(factor) {
+        let (y, psi) = (f64::from(y), 1.0 / f64::from(f));
+        let weight = y / (y * y + RELMSE_EPSILON);
+        shaped_n += y / psi;
+        shaped_v += weight * psi;
+        plain_n += y;
+        plain_v += weight;
+    }
+    let ratio = shaped_n * shaped_v / (plain_n * plain_v);
+    if ratio.is_finite() && ratio > 0.0 { ratio } else { 1.0 }
+}
+
+/// The radius of the square window whose pixels hold [`WINDOW_SAMPLES`] of a pilot's `spp`
+/// samples per pixel.
+pub fn window_radius(spp: u32) -> usize {
+    (0..)
+        .find(|&r: &usize| ((2 * r + 1).pow(2) as u64) * u64::from(spp.max(1)) >= u64::from(WINDOW_SAMPLES))
+        .unwrap_or(0)
+}
+
+/// Each pixel's `reduce` over its `(2·radius + 1)²` neighbourhood (cut at the film's edges),
+/// row by row.
+pub(crate) fn neighbourhood(
+    width: usize,
+    height: usize,
+    v: &[f32],
+    radius: usize,
+    reduce: impl Fn(&mut Vec<f32>) -> f32,
+) -> Vec<f32> {
+    let mut window = Vec::with_capacity((2 * radius + 1).pow(2));
     (0..width * height)
         .map(|j| {
             let (x, y) = (j % width, j / width);
             window.clear();
-            for yy in y.saturating_sub(1)..(y + 2).min(height) {
-                for xx in x.saturating_sub(1)..(x + 2).min(width) {
+            for yy in y.saturating_sub(radius)..(y + radius + 1).min(height) {
+                for xx in x.saturating_sub(radius)..(x + radius + 1).min(width) {
                     window.push(v[yy * width + xx]);
                 }
             }
@@ -112,7 +170,7 @@ mod tests {
                 }
             }
         }
-        let map = ImportanceMap::from_pilot(w, h, &lum, 1e-4).unwrap();
+        let map = ImportanceMap::from_pilot(w, h, &lum, 16, 1e-4).unwrap();
         let at = |x: usize, y: usize| map.factor(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
         // The floor is far below every lit level here.
         assert!((at(8, 6) - 1.0).abs() < 1e-3, "{}", at(8, 6));
@@ -123,7 +181,7 @@ mod tests {
         assert!((at(8, 4) - 1.0).abs() < 1e-3, "{}", at(8, 4));
         // Dark pixels two from any light: the floor's factor, finite and the largest.
         assert!(at(0, 9).is_finite() && at(0, 9) > 100.0, "{}", at(0, 9));
-        let floored = ImportanceMap::from_pilot(w, h, &lum, 0.05).unwrap();
+        let floored = ImportanceMap::from_pilot(w, h, &lum, 16, 0.05).unwrap();
         let f = |x: usize, y: usize| floored.factor(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
         assert!(f(0, 9) > f(8, 6) && f(8, 6) < at(8, 6) && f(0, 9) < 1.0, "{} {}", f(0, 9), f(8, 6));
         // Positions outside the film clamp to its edge.
@@ -132,9 +190,52 @@ mod tests {
         assert_eq!(ImportanceMap::of(None, 3, Vec2::new(10.5, 4.5)), 1.0);
         assert_eq!(ImportanceMap::of(Some(&map), 3, Vec2::new(10.5, 4.5)), at(10, 4));
         // No light, a wrong size or no floor: no map.
-        assert!(ImportanceMap::from_pilot(w, h, &vec![0.0; w * h], 0.1).is_none());
-        assert!(ImportanceMap::from_pilot(w, h, &lum[1..], 0.1).is_none());
-        assert!(ImportanceMap::from_pilot(w, h, &lum, 0.0).is_none());
-        assert!(ImportanceMap::from_pilot(w, h, &lum, f64::NAN).is_none());
+        assert!(ImportanceMap::from_pilot(w, h, &vec![0.0; w * h], 16, 0.1).is_none());
+        assert!(ImportanceMap::from_pilot(w, h, &lum[1..], 16, 0.1).is_none());
+        assert!(ImportanceMap::from_pilot(w, h, &lum, 16, 0.0).is_none());
+        assert!(ImportanceMap::from_pilot(w, h, &lum, 16, f64::NAN).is_none());
+    }
+
+    /// A pilot of fewer samples per pixel is averaged over neighbours first: a lone bright
+    /// pixel of a one-sample pilot (a firefly as likely as a glint) lowers the map around it by
+    /// far less than the same pixel of a sixteen-sample pilot.
+    #[test]
+    fn sparse_pilots_are_averaged_first() {
+        assert_eq!([16, 40, 15, 4, 2, 1, 0].map(window_radius), [0, 0, 1, 1, 1, 2, 2]);
+        let (w, h) = (16, 10);
+        let mut lum = vec![1.0f32; w * h];
+        lum[4 * w + 8] = 1000.0;
+        let dense = ImportanceMap::from_pilot(w, h, &lum, 16, 1e-4).unwrap();
+        let sparse = ImportanceMap::from_pilot(w, h, &lum, 1, 1e-4).unwrap();
+        let at = |m: &ImportanceMap| m.factor(Vec2::new(8.5, 4.5));
+        assert!(at(&dense) < 0.0011, "{}", at(&dense));
+        // 5×5 mean (1000 + 24)/25 ≈ 41, its largest neighbour and their mean: about 1/41.
+        assert!(at(&sparse) > 0.02 && at(&sparse) < 0.03, "{}", at(&sparse));
+        // Far from it both maps are the background's.
+        let far = Vec2::new(0.5, 9.5);
+        assert!((dense.factor(far) - 1.0).abs() < 1e-3 && (sparse.factor(far) - 1.0).abs() < 1e-3);
+    }
+
+    /// The predicted gain: none on an evenly lit image; large where a few pixels are far
+    /// brighter than the rest (the model's ratio for a tenth of the pixels 100 times brighter
+    /// and a floor far below both levels is about 0.10); a brighter floor predicts less.
+    #[test]
+    fn the_prediction_follows_the_dynamic_range() {
+        let (w, h) = (40, 30);
+        let even = ImportanceMap::from_pilot(w, h, &vec![0.7; w * h], 16, 0.5).unwrap();
+        assert!((even.predicted_ratio() - 1.0).abs() < 1e-6, "{}", even.predicted_ratio());
+        let lum: Vec<f32> = (0..w * h).map(|j| if j % w < 4 { 100.0 } else { 1.0 }).collect();
+        let steep = ImportanceMap::from_pilot(w, h, &lum, 16, 1e-3).unwrap();
+        let (b, d) = (100.0f64, 1.0f64);
+        let (nb, nd) = (0.1, 0.9);
+        let weight = |y: f64| y / (y * y + RELMSE_EPSILON);
+        let model = (nb + nd) * (nb * b * weight(b) + nd * d * weight(d))
+            / ((nb * b + nd * d) * (nb * weight(b) + nd * weight(d)));
+        // The 3×3 maximum widens the bright columns by one, which predicts a little more gain.
+        assert!((0.10..0.11).contains(&model), "{model}");
+        let ratio = steep.predicted_ratio();
+        assert!(ratio > 0.6 * model && ratio < 1.05 * model, "{ratio} vs {model}");
+        let floored = ImportanceMap::from_pilot(w, h, &lum, 16, 0.5).unwrap();
+        assert!(floored.predicted_ratio() > steep.predicted_ratio() && floored.predicted_ratio() < 1.0);
     }
 }

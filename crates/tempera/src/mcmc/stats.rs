@@ -68,6 +68,9 @@ pub struct DepthStats {
     /// The bootstrap's independent acceptance ([`super::acceptance::independent_acceptance`])
     /// where tempered MMLT chose between its chains and BDPT by it, in depth 0's row.
     pub independent_acceptance: Option<f64>,
+    /// What the pilot of `--importance-pilot` drew and chose
+    /// ([`crate::integrator::importance_pilot`]), in depth 0's row.
+    pub importance_pilot: Option<crate::integrator::importance_pilot::PilotChoice>,
     /// The sums of the bridge estimate of `b` ([`super::bridge`]) over the group's main chains.
     pub bridge: BridgeSums,
     /// `b` as the bridge estimate gives it from the bootstrap, the large steps and the chains'

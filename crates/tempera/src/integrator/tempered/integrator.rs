@@ -134,6 +134,10 @@ pub struct TemperedIntegrator {
     pub importance_pilot: u32,
     /// The shaping's floor `φ` as a fraction of the pilot image's mean.
     pub importance_floor: f64,
+    /// The share of a time budget the shaping's pilot takes at most.
+    pub importance_share: f64,
+    /// The predicted relMSE ratio below which the pilot's map shapes the chains.
+    pub importance_below: f64,
 }
 
 /// [`TemperedIntegrator::bdpt_above`]'s default: between the scenes where the chains were
@@ -194,6 +198,8 @@ impl TemperedIntegrator {
             bdpt_above: Some(DEFAULT_BDPT_ABOVE),
             importance_pilot: 0,
             importance_floor: crate::mcmc::importance::DEFAULT_FLOOR,
+            importance_share: crate::integrator::importance_pilot::DEFAULT_SHARE,
+            importance_below: crate::integrator::importance_pilot::DEFAULT_BELOW,
         }
     }
 
@@ -381,13 +387,13 @@ impl Integrator for TemperedIntegrator {
         let main = |depth| TemperedTarget::flattened(scene, depth, self.tempering(), 0.0, self.flattening);
         // The chains, shaped per pixel by a pilot where asked (their bootstrap then drawn anew
         // under the shaped targets).
-        let shaping = (self.importance_pilot, self.importance_floor);
+        let shaping = self.shaping();
         let render_chains = |rest: &RenderSettings, control: &RenderControl, boots: Option<Bootstraps>| {
             importance_pilot::render(shaping, self.max_depth, scene, rest, control, |importance, s, c| {
                 let main = |depth| main(depth).with_importance(importance);
                 let start = |cx: StartContext| self.start_walker((scene, importance), &ladder, cx);
                 // A bootstrap drawn under the unshaped targets serves unshaped chains only.
-                let boots = boots.filter(|_| self.importance_pilot == 0);
+                let boots = boots.filter(|_| importance.is_none());
                 chains.render(scene, s, c, depths, main, start, boots)
             })
         };
@@ -439,6 +445,16 @@ impl Integrator for TemperedIntegrator {
 }
 
 impl TemperedIntegrator {
+    /// How the chains' targets are shaped per pixel.
+    fn shaping(&self) -> importance_pilot::Shaping {
+        importance_pilot::Shaping {
+            spp: self.importance_pilot,
+            floor: self.importance_floor,
+            share: self.importance_share,
+            below: self.importance_below,
+        }
+    }
+
     /// The chains' driver settings.
     fn chain_settings(&self) -> ChainSettings {
         ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
