@@ -53,10 +53,9 @@ pub struct Shaping {
 /// The share of a time budget a pilot takes at most unless the render says otherwise.
 pub const DEFAULT_SHARE: f64 = 0.05;
 
-/// The predicted ratio below which the chains are shaped unless the render says otherwise.
-/// Measured chains gained less than the model predicts (0.67× MMLT at 90 s on the twin
-/// caustics, predicted 0.33×; 0.89× on veach-ajar, predicted 0.61×, where they lost at 10 and
-/// 30 s), so only a large predicted gain is taken.
+/// The predicted ratio below which the chains are shaped unless the render says otherwise:
+/// the chains measured gain less than the model predicts, so only a large predicted gain is
+/// taken (README, "Targets shaped per pixel").
 pub const DEFAULT_BELOW: f64 = 0.5;
 
 /// What the pilot drew and chose (`--stats` writes it in depth 0's row as `importance_pilot`).
@@ -73,10 +72,9 @@ pub struct PilotChoice {
 }
 
 /// Renders by `main` with the map of a pilot (none where `shaping.spp` is 0, or where the map
-/// predicts too little gain: `shaping.below`). The pilot runs in
-/// passes of one sample per pixel, each with its own seed: under a fixed budget all
-/// `shaping.spp` of them, so the map is the same at any thread count; under a time budget as
-/// many as fit in its share.
+/// predicts too little gain: `shaping.below`). The pilot runs in passes of one sample per
+/// pixel, each with its own seed: under a fixed budget all `shaping.spp` of them, so the map is
+/// the same at any thread count; under a time budget as many as fit in its share.
 pub fn render(
     shaping: Shaping,
     max_depth: u32,
