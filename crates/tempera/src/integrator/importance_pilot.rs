@@ -15,6 +15,7 @@ use super::{BdptIntegrator, Budget, Integrator, RenderControl, RenderOutput, Ren
 use crate::cluster::Cluster;
 use crate::mcmc::importance::ImportanceMap;
 use crate::scene::Scene;
+use crate::texture::Image;
 use std::time::Instant;
 
 /// Whether a render with a pilot of `spp` samples per pixel may also combine its chains with
@@ -49,6 +50,9 @@ pub struct Shaping {
     /// this; elsewhere they sample MMLT's targets.
     pub below: f64,
 }
+
+/// Passes after which the pilot stops where its map already predicts too little gain.
+pub const DECIDE_AFTER: u32 = 2;
 
 /// The share of a time budget a pilot takes at most unless the render says otherwise.
 pub const DEFAULT_SHARE: f64 = 0.05;
@@ -111,7 +115,7 @@ pub fn render(
             // Interrupted before the chains began: the pilot's image is the render's (the
             // finished passes', or the unfinished one's where none finished).
             let mut out = pilot.unwrap_or(pass);
-            mean_of_passes(&mut out, passes.max(1));
+            mean_of_passes(&mut out.image, passes.max(1));
             out.stats.cancelled = true;
             return Ok(out);
         }
@@ -123,12 +127,18 @@ pub fn render(
             }
         }
         passes += 1;
+        // A map of a few passes looks more uneven than the image is (its noise), so it predicts
+        // at least the gain a longer pilot would: where even it predicts too little, the rest
+        // of the pilot would be spent for nothing.
+        if passes == DECIDE_AFTER && passes < shaping.spp {
+            let sum = pilot.as_ref().expect("a finished pass");
+            if map_of(sum, passes, shaping.floor, control.cluster).1 >= shaping.below {
+                break;
+            }
+        }
     }
-    let mut pilot = pilot.expect("at least one pass");
-    mean_of_passes(&mut pilot, passes);
-    let luminance = shared_luminance(&pilot, control.cluster);
-    let map = ImportanceMap::from_pilot(pilot.image.width, pilot.image.height, &luminance, passes, shaping.floor);
-    let predicted_ratio = map.as_ref().map_or(1.0, ImportanceMap::predicted_ratio);
+    let pilot = pilot.expect("at least one pass");
+    let (map, predicted_ratio) = map_of(&pilot, passes, shaping.floor, control.cluster);
     let map = map.filter(|_| predicted_ratio < shaping.below);
     let spent = start.elapsed();
     let snapshots = super::snapshots_after(control.snapshots, spent);
@@ -144,24 +154,35 @@ pub fn render(
     Ok(out)
 }
 
+/// The map of the mean of `passes` passes whose image sum is `sum`, and its predicted ratio (1
+/// without a map).
+fn map_of(sum: &RenderOutput, passes: u32, floor: f64, cluster: &dyn Cluster) -> (Option<ImportanceMap>, f64) {
+    let mut mean = sum.image.clone();
+    mean_of_passes(&mut mean, passes);
+    let luminance = shared_luminance(&mean, cluster);
+    let map = ImportanceMap::from_pilot(mean.width, mean.height, &luminance, passes, floor);
+    let predicted = map.as_ref().map_or(1.0, ImportanceMap::predicted_ratio);
+    (map, predicted)
+}
+
 /// The pilot image's luminance, rank 0's on every rank (the image is merged there alone): the
 /// other ranks add zeros to its bits in an exact integer sum.
-fn shared_luminance(pilot: &RenderOutput, cluster: &dyn Cluster) -> Vec<f32> {
-    let luminance = pilot.image.pixels.iter().map(|&p| crate::math::luminance(p));
+fn shared_luminance(image: &Image, cluster: &dyn Cluster) -> Vec<f32> {
+    let luminance = image.pixels.iter().map(|&p| crate::math::luminance(p));
     if !cluster.is_distributed() {
         return luminance.collect();
     }
     let mut bits: Vec<i64> = if cluster.is_root() {
         luminance.map(|y| i64::from(y.to_bits())).collect()
     } else {
-        vec![0; pilot.image.width * pilot.image.height]
+        vec![0; image.width * image.height]
     };
     cluster.sum(&mut bits);
     bits.iter().map(|&b| f32::from_bits(b as u32)).collect()
 }
 
 /// Divides the sum of `passes` passes' images by their count.
-fn mean_of_passes(out: &mut RenderOutput, passes: u32) {
+fn mean_of_passes(image: &mut Image, passes: u32) {
     let scale = 1.0 / passes as f32;
-    out.image.pixels.iter_mut().for_each(|p| *p *= scale);
+    image.pixels.iter_mut().for_each(|p| *p *= scale);
 }
