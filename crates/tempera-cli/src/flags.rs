@@ -56,7 +56,8 @@ pub struct IntegratorFlags {
     pub target_clamp: Option<f64>,
     /// MMLT and tempered MMLT: shape the chains' targets per pixel by a pilot of N samples per
     /// pixel of bidirectional path tracing, so that dim pixels get about as many mutations as
-    /// bright ones and the image's relative error evens out (default 0: MMLT's target)
+    /// bright ones and the image's relative error evens out, where the pilot predicts a large
+    /// gain (--importance-below) (default: 0, MMLT's target, for MMLT; 16 for tempered MMLT)
     #[arg(long, value_name = "N")]
     pub importance_pilot: Option<u32>,
     /// MMLT and tempered MMLT with --importance-pilot: pixels darker than F times the pilot

@@ -47,6 +47,7 @@ fn measuring_keeps_the_image_at_any_thread_count() {
         measure_efficiency: true,
         ensembles_below: 0,
         bdpt_above: None,
+        importance_pilot: 0,
         ..TemperedIntegrator::new(4)
     };
     let reference = render_with(&scene, &plain, Budget::Samples(16), 9, 1);

@@ -78,6 +78,7 @@ fn hybrid_keeps_the_image_with_clamped_targets_and_tempered_ensembles() {
         chain_efficiency: 1.0,
         ensembles_below: 0,
         bdpt_above: None,
+        importance_pilot: 0,
         ..TemperedIntegrator::new(5)
     };
     let out = render_with(&scene, &tempered, Budget::Samples(512), 4, 0);
@@ -135,6 +136,7 @@ fn hybrid_auto_chooses_by_a_pilot_and_keeps_the_image() {
         hybrid_auto: true,
         ensembles_below: 0,
         bdpt_above: None,
+        importance_pilot: 0,
         ..TemperedIntegrator::new(5)
     };
     let out = render_with(&scene, &tempered, Budget::Samples(128), 6, 0);

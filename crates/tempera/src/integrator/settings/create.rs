@@ -76,7 +76,15 @@ pub fn create(
                 replicas: s.replica_count().unwrap_or(m.replicas),
                 independent_below: s.independent_below.unwrap_or(m.independent_below),
                 normaliser_share: s.normaliser_share.unwrap_or(m.normaliser_share),
-                importance_pilot: s.importance_pilot.unwrap_or(m.importance_pilot),
+                // The shaping is tempered MMLT's default, but it weighs states as the combination with
+                // BDPT and the efficiency measurement cannot yet: those turn it off unless asked for.
+                importance_pilot: s.importance_pilot.unwrap_or(
+                    if s.hybrid.is_some_and(|h| h.is_auto() || h.ratio() > 0.0) || s.measure_efficiency == Some(true) {
+                        0
+                    } else {
+                        m.importance_pilot
+                    },
+                ),
                 importance_floor: s.importance_floor.unwrap_or(m.importance_floor),
                 importance_share: s.importance_share.unwrap_or(m.importance_share),
                 importance_below: s.importance_below.unwrap_or(m.importance_below),

@@ -130,7 +130,8 @@ pub struct TemperedIntegrator {
     /// images or the chains' efficiency measured, which are the chains' own).
     pub bdpt_above: Option<f64>,
     /// Samples per pixel of the BDPT pilot whose image shapes the chains' targets per pixel
-    /// where the chains render ([`crate::mcmc::importance`]; 0: no shaping).
+    /// where the chains render ([`crate::mcmc::importance`]; 0: no shaping; 16 unless the
+    /// render says otherwise).
     pub importance_pilot: u32,
     /// The shaping's floor `φ` as a fraction of the pilot image's mean.
     pub importance_floor: f64,
@@ -196,7 +197,9 @@ impl TemperedIntegrator {
             independent_below: 40,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
             bdpt_above: Some(DEFAULT_BDPT_ABOVE),
-            importance_pilot: 0,
+            // Shaped where the pilot predicts a large gain: measured against none (README,
+            // "A cheaper pilot, and a choice of where to shape").
+            importance_pilot: 16,
             importance_floor: crate::mcmc::importance::DEFAULT_FLOOR,
             importance_share: crate::integrator::importance_pilot::DEFAULT_SHARE,
             importance_below: crate::integrator::importance_pilot::DEFAULT_BELOW,

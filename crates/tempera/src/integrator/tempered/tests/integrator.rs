@@ -257,7 +257,9 @@ fn ensembles_only_where_the_bootstrap_is_sparse() {
     let (scene, bdpt) = default_scene_and_bdpt();
     let cancel = AtomicBool::new(false);
     let control = RenderControl::new(&cancel, &|_| {});
-    let mmlt = MmltIntegrator { bootstrap: 20_000, chains: 16, ..MmltIntegrator::new(5) };
+    // Shaped as tempered MMLT's defaults shape (where the pilot chooses to).
+    let importance_pilot = TemperedIntegrator::new(5).importance_pilot;
+    let mmlt = MmltIntegrator { bootstrap: 20_000, chains: 16, importance_pilot, ..MmltIntegrator::new(5) };
     let t = TemperedIntegrator {
         bootstrap: 20_000,
         chains: 16,

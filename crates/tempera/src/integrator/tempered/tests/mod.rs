@@ -295,6 +295,8 @@ mod splats {
                 replica_splats,
                 ensembles_below: 0,
                 bdpt_above: None,
+                // MMLT's targets: the splats' comparison, not the shaping's seed spread.
+                importance_pilot: 0,
                 ..TemperedIntegrator::new(3)
             };
             for seed in 0..seeds {

@@ -59,7 +59,14 @@ fn tune(scene: &Scene, burn_in: u64) -> (f64, Vec<f32>) {
     let tuning = if burn_in > 0 { LadderTuning::BurnIn } else { LadderTuning::None };
     acceptance_and_ladder(
         scene,
-        TemperedIntegrator { tuning, burn_in, ensembles_below: 0, bdpt_above: None, ..TemperedIntegrator::new(3) },
+        TemperedIntegrator {
+            tuning,
+            burn_in,
+            ensembles_below: 0,
+            bdpt_above: None,
+            importance_pilot: 0,
+            ..TemperedIntegrator::new(3)
+        },
         16,
     )
 }
@@ -75,6 +82,8 @@ fn assert_reaches_targets(tuning: LadderTuning) {
             swap_target,
             ensembles_below: 0,
             bdpt_above: None,
+            // The tuner on MMLT's targets, as the paper tunes it.
+            importance_pilot: 0,
             ..TemperedIntegrator::new(3)
         };
         acceptance_and_ladder(&scene, t, 128)
