@@ -7,9 +7,9 @@
 //! snapshots as much earlier), or under the whole of a fixed one. Under a fixed budget the
 //! pilot's samples are a fixed count, so the map, and the image, are the same at any thread
 //! count, and across MPI ranks (the pilot's passes are shared among them like any BDPT
-//! render's, and rank 0's image gives every rank the map). Its image is not part of the render's (unless the
-//! render is interrupted before the chains begin: then it is the image there is); its time and
-//! rays are counted in the render's statistics.
+//! render's, and rank 0's image gives every rank the map). Its image is not part of the
+//! render's (unless the render is interrupted before the chains begin: then it is the image
+//! there is); its time and rays are counted in the render's statistics.
 
 use super::{BdptIntegrator, Budget, Integrator, RenderControl, RenderOutput, RenderSettings};
 use crate::cluster::Cluster;
@@ -59,7 +59,7 @@ pub const DEFAULT_SHARE: f64 = 0.05;
 
 /// The predicted ratio below which the chains are shaped unless the render says otherwise:
 /// the chains measured gain less than the model predicts, so only a large predicted gain is
-/// taken (README, "Targets shaped per pixel").
+/// taken (README, "A cheaper pilot, and a choice of where to shape").
 pub const DEFAULT_BELOW: f64 = 0.5;
 
 /// What the pilot drew and chose (`--stats` writes it in depth 0's row as `importance_pilot`).

@@ -19,9 +19,10 @@
 //! each pixel's value averaged over the smallest square around it that holds
 //! [`WINDOW_SAMPLES`] of the pilot's samples (the pixel alone at 16 samples per pixel, 3×3 at
 //! 2–15, 5×5 at one), then per pixel the largest value of its 3×3 neighbourhood, averaged over
-//! the 3×3 neighbourhood again. `φ` is `floor` times the pilot's mean. The map errs towards bright: a pixel the pilot
-//! overestimates gets fewer mutations than it should, and only its own noise grows; one it
-//! underestimates (a glint the pilot missed) gets a target far above its neighbours', where
+//! the 3×3 neighbourhood again. `φ` is `floor` times the pilot's mean. The map errs towards
+//! bright: a pixel the pilot overestimates gets fewer mutations than it should, and only its
+//! own noise grows; one it underestimates (a glint the pilot missed) gets a target far above
+//! its neighbours', where
 //! the chains that find it stay and pile up its light, and the depth's normalisation, a mean of
 //! `g`, gets the heavier tail. Depth 0 (the emitters seen directly) keeps MMLT's
 //! target: each depth's chains and normalisation are their own, so every depth may have its own
@@ -119,7 +120,7 @@ fn predicted_ratio(bright: &[f32], factor: &[f32]) -> f64 {
 
 /// The radius of the square window whose pixels hold [`WINDOW_SAMPLES`] of a pilot's `spp`
 /// samples per pixel.
-pub fn window_radius(spp: u32) -> usize {
+fn window_radius(spp: u32) -> usize {
     (0..)
         .find(|&r: &usize| ((2 * r + 1).pow(2) as u64) * u64::from(spp.max(1)) >= u64::from(WINDOW_SAMPLES))
         .unwrap_or(0)
