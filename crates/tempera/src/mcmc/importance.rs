@@ -22,11 +22,10 @@
 //! the 3×3 neighbourhood again. `φ` is `floor` times the pilot's mean. The map errs towards
 //! bright: a pixel the pilot overestimates gets fewer mutations than it should, and only its
 //! own noise grows; one it underestimates (a glint the pilot missed) gets a target far above
-//! its neighbours', where
-//! the chains that find it stay and pile up its light, and the depth's normalisation, a mean of
-//! `g`, gets the heavier tail. Depth 0 (the emitters seen directly) keeps MMLT's
-//! target: each depth's chains and normalisation are their own, so every depth may have its own
-//! positive target.
+//! its neighbours', where the chains that find it stay and pile up its light, and the depth's
+//! normalisation, a mean of `g`, gets the heavier tail. Depth 0 (the emitters seen directly)
+//! keeps MMLT's target: each depth's chains and normalisation are their own, so every depth
+//! may have its own positive target.
 
 use crate::math::Vec2;
 
