@@ -64,6 +64,11 @@ pub struct IntegratorFlags {
     /// image's mean get fewer mutations, in proportion to their brightness (default 0.5)
     #[arg(long, value_name = "F")]
     pub importance_floor: Option<f64>,
+    /// MMLT and tempered MMLT with --importance-pilot: the power of the shape, 1 for dim and
+    /// bright pixels' getting about as many mutations, towards 0 MMLT's share by brightness
+    /// (default 0.75)
+    #[arg(long, value_name = "G")]
+    pub importance_power: Option<f64>,
     /// MMLT and tempered MMLT with --importance-pilot under a time budget: the pilot stops
     /// before it takes more than this share of the time (default 0.05; at least one sample per
     /// pixel)
@@ -224,6 +229,7 @@ impl IntegratorFlags {
             target_clamp: self.target_clamp,
             importance_pilot: self.importance_pilot,
             importance_floor: self.importance_floor,
+            importance_power: self.importance_power,
             importance_share: self.importance_share,
             importance_below: self.importance_below,
             hybrid: self.hybrid,

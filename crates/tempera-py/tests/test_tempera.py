@@ -71,8 +71,9 @@ def test_a_pbrt_mlt_file_sets_the_mutations_per_pixel(tmp_path):
         ("mmlt", ["--mpp", "2", "--bootstrap", "3000"], {"mpp": 2, "bootstrap": 3000}),
         (
             "mmlt",
-            ["--mpp", "2", "--bootstrap", "3000", "--importance-pilot", "2", "--importance-floor", "0.3"],
-            {"mpp": 2, "bootstrap": 3000, "importance_pilot": 2, "importance_floor": 0.3},
+            ["--mpp", "2", "--bootstrap", "3000", "--importance-pilot", "2", "--importance-floor", "0.3"]
+            + ["--importance-power", "0.7"],
+            {"mpp": 2, "bootstrap": 3000, "importance_pilot": 2, "importance_floor": 0.3, "importance_power": 0.7},
         ),
         (
             "tempered",

@@ -43,6 +43,8 @@ pub struct Shaping {
     pub spp: u32,
     /// The floor `φ` over the pilot image's mean ([`ImportanceMap::from_pilot`]).
     pub floor: f64,
+    /// The power `γ` of the shape ([`ImportanceMap::from_pilot`]).
+    pub power: f64,
     /// The share of a time budget the pilot may take: it stops at `spp` samples per pixel or
     /// before a pass would take it past this share, whichever comes first (one pass at least).
     pub share: f64,
@@ -132,13 +134,13 @@ pub fn render(
         // of the pilot would be spent for nothing.
         if passes == DECIDE_AFTER && passes < shaping.spp {
             let sum = pilot.as_ref().expect("a finished pass");
-            if map_of(sum, passes, shaping.floor, control.cluster).1 >= shaping.below {
+            if map_of(sum, passes, &shaping, control.cluster).1 >= shaping.below {
                 break;
             }
         }
     }
     let pilot = pilot.expect("at least one pass");
-    let (map, predicted_ratio) = map_of(&pilot, passes, shaping.floor, control.cluster);
+    let (map, predicted_ratio) = map_of(&pilot, passes, &shaping, control.cluster);
     let map = map.filter(|_| predicted_ratio < shaping.below);
     let spent = start.elapsed();
     let snapshots = super::snapshots_after(control.snapshots, spent);
@@ -156,11 +158,11 @@ pub fn render(
 
 /// The map of the mean of `passes` passes whose image sum is `sum`, and its predicted ratio (1
 /// without a map).
-fn map_of(sum: &RenderOutput, passes: u32, floor: f64, cluster: &dyn Cluster) -> (Option<ImportanceMap>, f64) {
+fn map_of(sum: &RenderOutput, passes: u32, shaping: &Shaping, cluster: &dyn Cluster) -> (Option<ImportanceMap>, f64) {
     let mut mean = sum.image.clone();
     mean_of_passes(&mut mean, passes);
     let luminance = shared_luminance(&mean, cluster);
-    let map = ImportanceMap::from_pilot(mean.width, mean.height, &luminance, passes, floor);
+    let map = ImportanceMap::from_pilot(mean.width, mean.height, &luminance, passes, shaping.floor, shaping.power);
     let predicted = map.as_ref().map_or(1.0, ImportanceMap::predicted_ratio);
     (map, predicted)
 }

@@ -60,6 +60,8 @@ pub struct MmltIntegrator {
     pub importance_pilot: u32,
     /// The shaping's floor `φ` as a fraction of the pilot image's mean.
     pub importance_floor: f64,
+    /// The shaping's power `γ` ([`crate::mcmc::importance`]).
+    pub importance_power: f64,
     /// The share of a time budget the shaping's pilot takes at most.
     pub importance_share: f64,
     /// The predicted relMSE ratio below which the pilot's map shapes the chains.
@@ -87,6 +89,7 @@ impl MmltIntegrator {
             bridge_above: Some(crate::mcmc::bridge::DEFAULT_ABOVE),
             importance_pilot: 0,
             importance_floor: crate::mcmc::importance::DEFAULT_FLOOR,
+            importance_power: crate::mcmc::importance::DEFAULT_POWER,
             importance_share: crate::integrator::importance_pilot::DEFAULT_SHARE,
             importance_below: crate::integrator::importance_pilot::DEFAULT_BELOW,
         }
@@ -209,6 +212,7 @@ impl MmltIntegrator {
         super::importance_pilot::Shaping {
             spp: self.importance_pilot,
             floor: self.importance_floor,
+            power: self.importance_power,
             share: self.importance_share,
             below: self.importance_below,
         }

@@ -231,6 +231,10 @@ pub struct IntegratorSettings {
     /// fraction of the pilot image's mean.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub importance_floor: Option<f64>,
+    /// MMLT and tempered MMLT with `importance_pilot`: the power of the per-pixel shape (1: the
+    /// full shape, towards 0: MMLT's target).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub importance_power: Option<f64>,
     /// MMLT and tempered MMLT with `importance_pilot`: the share of a time budget the pilot
     /// takes at most.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -388,6 +392,7 @@ impl IntegratorSettings {
             ("target_clamp", self.target_clamp.is_some(), kind == Mmlt),
             ("importance_pilot", self.importance_pilot.is_some(), kind == Mmlt || tempered),
             ("importance_floor", self.importance_floor.is_some(), kind == Mmlt || tempered),
+            ("importance_power", self.importance_power.is_some(), kind == Mmlt || tempered),
             ("importance_share", self.importance_share.is_some(), kind == Mmlt || tempered),
             ("importance_below", self.importance_below.is_some(), kind == Mmlt || tempered),
             ("hybrid", self.hybrid.is_some(), kind == Mmlt || tempered),
@@ -486,6 +491,9 @@ impl IntegratorSettings {
         check_range("importance_pilot", self.importance_pilot, 0..=1024)?;
         if self.importance_floor.is_some_and(|f| !(f > 0.0 && f <= 100.0)) {
             return Err("importance_floor must be above 0 and at most 100".into());
+        }
+        if self.importance_power.is_some_and(|g| !(g > 0.0 && g <= 2.0)) {
+            return Err("importance_power must be above 0 and at most 2".into());
         }
         if self.importance_share.is_some_and(|f| !(f > 0.0 && f <= 0.5)) {
             return Err("importance_share must be above 0 and at most 0.5".into());

@@ -52,6 +52,16 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
         ),
         (
             IntegratorKind::Mmlt,
+            IntegratorSettings { importance_power: Some(2.5), ..Default::default() },
+            "importance_power must",
+        ),
+        (
+            IntegratorKind::Path,
+            IntegratorSettings { importance_power: Some(0.5), ..Default::default() },
+            "importance_power is not",
+        ),
+        (
+            IntegratorKind::Mmlt,
             IntegratorSettings { importance_share: Some(0.9), ..Default::default() },
             "importance_share must",
         ),

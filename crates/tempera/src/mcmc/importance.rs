@@ -26,11 +26,21 @@
 //! normalisation, a mean of `g`, gets the heavier tail. Depth 0 (the emitters seen directly)
 //! keeps MMLT's target: each depth's chains and normalisation are their own, so every depth
 //! may have its own positive target.
+//!
+//! The model's variance, `Ī_p²/n_p`, is that of independent samples. A chain's states are not:
+//! where a depth's light comes from a few narrow, bright paths (a caustic seen through glass)
+//! the chains that find one stay on it for many mutations, and such pixels need more mutations
+//! than their brightness says. A power `γ` softens the shape: `g = f/ψ^γ`, so that
+//! `n_p ∝ Ī_p/ψ_p^γ`: `γ = 1` is the shape above, `γ = 0` MMLT's target, and between them
+//! bright pixels keep part of MMLT's share (README, "A softer shape").
 
 use crate::math::Vec2;
 
 /// The floor `φ` over the pilot image's mean unless the render says otherwise.
 pub const DEFAULT_FLOOR: f64 = 0.5;
+
+/// The power `γ` of the shape `ψ^γ` unless the render says otherwise.
+pub const DEFAULT_POWER: f64 = 0.75;
 
 /// The pilot's samples each pixel's value is first averaged over, at least: its own where the
 /// pilot took this many per pixel, its neighbours' too where it took fewer.
@@ -51,10 +61,19 @@ pub struct ImportanceMap {
 
 impl ImportanceMap {
     /// The map for a pilot image's pixel luminances (`width × height`, row by row) from `spp`
-    /// samples per pixel, with the floor `φ = floor · mean`; `None` if the pilot saw no light
-    /// (or `floor` is not positive).
-    pub fn from_pilot(width: usize, height: usize, luminance: &[f32], spp: u32, floor: f64) -> Option<Self> {
-        if width == 0 || height == 0 || luminance.len() != width * height || floor.is_nan() || floor <= 0.0 {
+    /// samples per pixel, with the floor `φ = floor · mean` and the factors `1/ψ^power`; `None`
+    /// if the pilot saw no light (or `floor` is not positive, or `power` not finite and
+    /// positive).
+    pub fn from_pilot(
+        width: usize,
+        height: usize,
+        luminance: &[f32],
+        spp: u32,
+        floor: f64,
+        power: f64,
+    ) -> Option<Self> {
+        let bad = |v: f64| !(v > 0.0 && v.is_finite());
+        if width == 0 || height == 0 || luminance.len() != width * height || bad(floor) || bad(power) {
             return None;
         }
         let clean: Vec<f32> = luminance.iter().map(|&y| if y.is_finite() && y > 0.0 { y } else { 0.0 }).collect();
@@ -68,14 +87,16 @@ impl ImportanceMap {
         if !(phi > 0.0 && phi.is_finite()) {
             return None;
         }
-        let factor: Vec<f32> =
-            smooth.iter().map(|&y| (1.0 / (f64::from(y).powi(2) + phi * phi).sqrt()) as f32).collect();
-        let predicted = predicted_ratio(&smooth, &factor);
+        let psi = |y: f32| (f64::from(y).powi(2) + phi * phi).sqrt();
+        let full: Vec<f32> = smooth.iter().map(|&y| (1.0 / psi(y)) as f32).collect();
+        let predicted = predicted_ratio(&smooth, &full);
+        let factor = if power == 1.0 { full } else { smooth.iter().map(|&y| psi(y).powf(-power) as f32).collect() };
         Some(Self { width, height, factor, predicted })
     }
 
-    /// The relMSE of chains under this map over that of MMLT's chains, as the model of the
-    /// module's documentation predicts it from the map's own brightness `Ī`: with `n_p ∝ Ī_p/ψ_p`
+    /// The relMSE of chains under the full shape (`γ = 1`, whatever the map's power) over that
+    /// of MMLT's chains, as the model of the module's documentation predicts it from the map's
+    /// own brightness `Ī`, a measure of how uneven the image is: with `n_p ∝ Ī_p/ψ_p`
     /// mutations (MMLT: `n_p ∝ Ī_p`) and per-pixel variance `Ī_p²/n_p`, relMSE is proportional to
     /// `Σ_p (Ī_p/ψ_p) · Σ_p Ī_p ψ_p/(Ī_p² + ε)` (MMLT: `Σ_p Ī_p · Σ_p Ī_p/(Ī_p² + ε)`), `ε` being
     /// relMSE's [`RELMSE_EPSILON`] in the image's units. Near 1 where the image's brightness is
@@ -170,7 +191,7 @@ mod tests {
                 }
             }
         }
-        let map = ImportanceMap::from_pilot(w, h, &lum, 16, 1e-4).unwrap();
+        let map = ImportanceMap::from_pilot(w, h, &lum, 16, 1e-4, 1.0).unwrap();
         let at = |x: usize, y: usize| map.factor(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
         // The floor is far below every lit level here.
         assert!((at(8, 6) - 1.0).abs() < 1e-3, "{}", at(8, 6));
@@ -181,7 +202,7 @@ mod tests {
         assert!((at(8, 4) - 1.0).abs() < 1e-3, "{}", at(8, 4));
         // Dark pixels two from any light: the floor's factor, finite and the largest.
         assert!(at(0, 9).is_finite() && at(0, 9) > 100.0, "{}", at(0, 9));
-        let floored = ImportanceMap::from_pilot(w, h, &lum, 16, 0.05).unwrap();
+        let floored = ImportanceMap::from_pilot(w, h, &lum, 16, 0.05, 1.0).unwrap();
         let f = |x: usize, y: usize| floored.factor(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
         assert!(f(0, 9) > f(8, 6) && f(8, 6) < at(8, 6) && f(0, 9) < 1.0, "{} {}", f(0, 9), f(8, 6));
         // Positions outside the film clamp to its edge.
@@ -190,10 +211,32 @@ mod tests {
         assert_eq!(ImportanceMap::of(None, 3, Vec2::new(10.5, 4.5)), 1.0);
         assert_eq!(ImportanceMap::of(Some(&map), 3, Vec2::new(10.5, 4.5)), at(10, 4));
         // No light, a wrong size or no floor: no map.
-        assert!(ImportanceMap::from_pilot(w, h, &vec![0.0; w * h], 16, 0.1).is_none());
-        assert!(ImportanceMap::from_pilot(w, h, &lum[1..], 16, 0.1).is_none());
-        assert!(ImportanceMap::from_pilot(w, h, &lum, 16, 0.0).is_none());
-        assert!(ImportanceMap::from_pilot(w, h, &lum, 16, f64::NAN).is_none());
+        assert!(ImportanceMap::from_pilot(w, h, &vec![0.0; w * h], 16, 0.1, 1.0).is_none());
+        assert!(ImportanceMap::from_pilot(w, h, &lum[1..], 16, 0.1, 1.0).is_none());
+        assert!(ImportanceMap::from_pilot(w, h, &lum, 16, 0.0, 1.0).is_none());
+        assert!(ImportanceMap::from_pilot(w, h, &lum, 16, f64::NAN, 1.0).is_none());
+        for power in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(ImportanceMap::from_pilot(w, h, &lum, 16, 0.1, power).is_none(), "{power}");
+        }
+    }
+
+    /// A power `γ` takes the `γ`-th power of every factor, so a factor ten times another's is
+    /// about three times it at `γ = 1/2`; the prediction, the full shape's, does not change.
+    #[test]
+    fn a_power_softens_the_map() {
+        let (w, h) = (40, 30);
+        let lum: Vec<f32> = (0..w * h).map(|j| if j % w < 4 { 100.0 } else { 1.0 + (j % 7) as f32 }).collect();
+        let full = ImportanceMap::from_pilot(w, h, &lum, 16, 0.05, 1.0).unwrap();
+        let soft = ImportanceMap::from_pilot(w, h, &lum, 16, 0.05, 0.5).unwrap();
+        assert_eq!(full.predicted_ratio(), soft.predicted_ratio());
+        for (x, y) in [(0, 0), (2, 10), (4, 4), (5, 29), (20, 15), (39, 3)] {
+            let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let (f, s) = (full.factor(p), soft.factor(p));
+            assert!((s / f.sqrt() - 1.0).abs() < 1e-5, "({x}, {y}): {s} vs sqrt {f}");
+        }
+        let (bright, dim) = (Vec2::new(1.5, 12.5), Vec2::new(30.5, 12.5));
+        let ratio = |m: &ImportanceMap| m.factor(dim) / m.factor(bright);
+        assert!(ratio(&full) > 10.0 && ratio(&soft) > 3.0 && ratio(&soft) < 0.5 * ratio(&full));
     }
 
     /// A pilot of fewer samples per pixel is averaged over neighbours first: a lone bright
@@ -205,8 +248,8 @@ mod tests {
         let (w, h) = (16, 10);
         let mut lum = vec![1.0f32; w * h];
         lum[4 * w + 8] = 1000.0;
-        let dense = ImportanceMap::from_pilot(w, h, &lum, 16, 1e-4).unwrap();
-        let sparse = ImportanceMap::from_pilot(w, h, &lum, 1, 1e-4).unwrap();
+        let dense = ImportanceMap::from_pilot(w, h, &lum, 16, 1e-4, 1.0).unwrap();
+        let sparse = ImportanceMap::from_pilot(w, h, &lum, 1, 1e-4, 1.0).unwrap();
         let at = |m: &ImportanceMap| m.factor(Vec2::new(8.5, 4.5));
         assert!(at(&dense) < 0.0011, "{}", at(&dense));
         // 5×5 mean (1000 + 24)/25 ≈ 41, its largest neighbour and their mean: about 1/41.
@@ -222,10 +265,10 @@ mod tests {
     #[test]
     fn the_prediction_follows_the_dynamic_range() {
         let (w, h) = (40, 30);
-        let even = ImportanceMap::from_pilot(w, h, &vec![0.7; w * h], 16, 0.5).unwrap();
+        let even = ImportanceMap::from_pilot(w, h, &vec![0.7; w * h], 16, 0.5, 1.0).unwrap();
         assert!((even.predicted_ratio() - 1.0).abs() < 1e-6, "{}", even.predicted_ratio());
         let lum: Vec<f32> = (0..w * h).map(|j| if j % w < 4 { 100.0 } else { 1.0 }).collect();
-        let steep = ImportanceMap::from_pilot(w, h, &lum, 16, 1e-3).unwrap();
+        let steep = ImportanceMap::from_pilot(w, h, &lum, 16, 1e-3, 1.0).unwrap();
         let (b, d) = (100.0f64, 1.0f64);
         let (nb, nd) = (0.1, 0.9);
         let weight = |y: f64| y / (y * y + RELMSE_EPSILON);
@@ -235,7 +278,7 @@ mod tests {
         assert!((0.10..0.11).contains(&model), "{model}");
         let ratio = steep.predicted_ratio();
         assert!(ratio > 0.6 * model && ratio < 1.05 * model, "{ratio} vs {model}");
-        let floored = ImportanceMap::from_pilot(w, h, &lum, 16, 0.5).unwrap();
+        let floored = ImportanceMap::from_pilot(w, h, &lum, 16, 0.5, 1.0).unwrap();
         assert!(floored.predicted_ratio() > steep.predicted_ratio() && floored.predicted_ratio() < 1.0);
     }
 }

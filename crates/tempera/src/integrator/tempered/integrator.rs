@@ -135,6 +135,8 @@ pub struct TemperedIntegrator {
     pub importance_pilot: u32,
     /// The shaping's floor `φ` as a fraction of the pilot image's mean.
     pub importance_floor: f64,
+    /// The shaping's power `γ` ([`crate::mcmc::importance`]).
+    pub importance_power: f64,
     /// The share of a time budget the shaping's pilot takes at most.
     pub importance_share: f64,
     /// The predicted relMSE ratio below which the pilot's map shapes the chains.
@@ -201,6 +203,7 @@ impl TemperedIntegrator {
             // "A cheaper pilot, and a choice of where to shape").
             importance_pilot: 16,
             importance_floor: crate::mcmc::importance::DEFAULT_FLOOR,
+            importance_power: crate::mcmc::importance::DEFAULT_POWER,
             importance_share: crate::integrator::importance_pilot::DEFAULT_SHARE,
             importance_below: crate::integrator::importance_pilot::DEFAULT_BELOW,
         }
@@ -453,6 +456,7 @@ impl TemperedIntegrator {
         importance_pilot::Shaping {
             spp: self.importance_pilot,
             floor: self.importance_floor,
+            power: self.importance_power,
             share: self.importance_share,
             below: self.importance_below,
         }
