@@ -28,9 +28,10 @@
 //! may have its own positive target.
 //!
 //! The model's variance, `Ī_p²/n_p`, is that of independent samples. A chain's states are not:
-//! where a depth's light comes from a few narrow, bright paths (a caustic seen through glass)
-//! the chains that find one stay on it for many mutations, and such pixels need more mutations
-//! than their brightness says. A power `γ` softens the shape: `g = f/ψ^γ`, so that
+//! where a depth's light comes from a few narrow paths (a caustic seen through glass) the
+//! chains that find one stay on it for many mutations, and the full shape, which gives a
+//! moderately lit pixel nearly the brightest pixels' share, raises such paths' share of the
+//! chains' time with it. A power `γ` softens the shape: `g = f/ψ^γ`, so that
 //! `n_p ∝ Ī_p/ψ_p^γ`: `γ = 1` is the shape above, `γ = 0` MMLT's target, and between them
 //! bright pixels keep part of MMLT's share (README, "A softer shape").
 
