@@ -17,13 +17,14 @@ fn one_replica_reproduces_mmlt_exactly() {
     let control = RenderControl::new(&cancel, &|_| {});
     // With the same allotment of mutations to depths (tempered MMLT's default is by spread).
     // And with the depths whose bootstrap has fewer than 1500 non-zero values of 5000 sampled
-    // independently.
+    // independently. And with tempered MMLT's per-pixel shaping, which shapes this scene.
     for (spread_allocation, independent_below) in [(false, 0), (true, 0), (true, 1500)] {
         let mmlt = MmltIntegrator {
             bootstrap: 5_000,
             chains: 8,
             spread_allocation,
             independent_below,
+            importance_pilot: TemperedIntegrator::new(5).importance_pilot,
             ..MmltIntegrator::new(5)
         };
         let tempered = TemperedIntegrator {
@@ -39,6 +40,8 @@ fn one_replica_reproduces_mmlt_exactly() {
         let a = mmlt.render(&scene, &settings(16, 3, 0), &control).unwrap();
         let b = tempered.render(&scene, &settings(16, 3, 0), &control).unwrap();
         assert!(a.image.pixels == b.image.pixels, "replicas = 1 is MMLT bit for bit");
+        let shaped = |o: &RenderOutput| o.chains[0].importance_pilot.is_some_and(|c| c.shaped);
+        assert!(shaped(&a) && shaped(&b), "the shaping was not tested");
     }
 }
 
