@@ -64,7 +64,7 @@ impl ImportanceMap {
     /// The map for a pilot image's pixel luminances (`width × height`, row by row) from `spp`
     /// samples per pixel, with the floor `φ = floor · mean` and the factors `1/ψ^power`; `None`
     /// if the pilot saw no light (or `floor` is not positive, or `power` not finite and
-    /// positive).
+    /// positive, or a factor would not be a finite positive `f32`).
     pub fn from_pilot(
         width: usize,
         height: usize,
@@ -92,6 +92,10 @@ impl ImportanceMap {
         let full: Vec<f32> = smooth.iter().map(|&y| (1.0 / psi(y)) as f32).collect();
         let predicted = predicted_ratio(&smooth, &full);
         let factor = if power == 1.0 { full } else { smooth.iter().map(|&y| psi(y).powf(-power) as f32).collect() };
+        // A very dim image's factors may leave `f32`'s range (above all for `γ > 1`): no map.
+        if !factor.iter().all(|&f| f.is_finite() && f > 0.0) {
+            return None;
+        }
         Some(Self { width, height, factor, predicted })
     }
 
@@ -222,7 +226,8 @@ mod tests {
     }
 
     /// A power `γ` takes the `γ`-th power of every factor, so a factor ten times another's is
-    /// about three times it at `γ = 1/2`; the prediction, the full shape's, does not change.
+    /// about three times it at `γ = 1/2`; the prediction, the full shape's, does not change; a
+    /// pilot so dim that its factors would leave `f32`'s range gives no map.
     #[test]
     fn a_power_softens_the_map() {
         let (w, h) = (40, 30);
@@ -238,6 +243,9 @@ mod tests {
         let (bright, dim) = (Vec2::new(1.5, 12.5), Vec2::new(30.5, 12.5));
         let ratio = |m: &ImportanceMap| m.factor(dim) / m.factor(bright);
         assert!(ratio(&full) > 10.0 && ratio(&soft) > 3.0 && ratio(&soft) < 0.5 * ratio(&full));
+        let dim: Vec<f32> = lum.iter().map(|&y| y * 1e-30).collect();
+        assert!(ImportanceMap::from_pilot(w, h, &dim, 16, 1e-3, 1.0).is_some());
+        assert!(ImportanceMap::from_pilot(w, h, &dim, 16, 1e-3, 2.0).is_none());
     }
 
     /// A pilot of fewer samples per pixel is averaged over neighbours first: a lone bright
