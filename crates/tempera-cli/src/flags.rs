@@ -75,7 +75,7 @@ pub struct IntegratorFlags {
     #[arg(long, value_name = "S")]
     pub importance_share: Option<f64>,
     /// MMLT and tempered MMLT with --importance-pilot: shape the chains only where the pilot's
-    /// map predicts a relMSE below R times that of MMLT's targets (default 0.68; any R above 1
+    /// map predicts a relMSE below R times that of MMLT's targets (default 0.665; any R above 1
     /// nearly always shapes)
     #[arg(long, value_name = "R")]
     pub importance_below: Option<f64>,

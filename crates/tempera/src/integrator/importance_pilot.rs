@@ -64,7 +64,7 @@ pub const DEFAULT_SHARE: f64 = 0.05;
 /// taken; with the softer shape ([`crate::mcmc::importance::DEFAULT_POWER`]) the shaping paid
 /// on both scenes it was measured on, whose predictions lie below this, and the one scene
 /// predicted above it was not measured shaped (README, "A softer shape").
-pub const DEFAULT_BELOW: f64 = 0.68;
+pub const DEFAULT_BELOW: f64 = 0.665;
 
 /// What the pilot drew and chose (`--stats` writes it in depth 0's row as `importance_pilot`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
