@@ -12,8 +12,9 @@ use crate::mcmc::importance::ImportanceMap;
 /// With a pilot of 4 samples per pixel, MMLT (the full shape, power 1) and tempered MMLT
 /// (ensembles at every depth, replica reuse, never BDPT alone; power 1/2) agree with BDPT on a
 /// Cornell box block by block; the shaping did bite (every depth's `b` is the shaped target's,
-/// far from MMLT's, and power 1/2 gives a `b` between the two); a shaped render is the same at
-/// any thread count, and one without a pilot is MMLT's, bit for bit.
+/// far from MMLT's, and power 1/2's ratio to MMLT's is about the square root of power 1's); a
+/// shaped render is the same at any thread count, and one without a pilot is MMLT's, bit for
+/// bit.
 #[test]
 fn shaped_chains_agree_with_bdpt() {
     let scene = crate::scenes::cornell_box(32, 32).build().unwrap();
