@@ -69,6 +69,11 @@ pub struct IntegratorFlags {
     /// (default 0.75)
     #[arg(long, value_name = "G")]
     pub importance_power: Option<f64>,
+    /// MMLT and tempered MMLT under a time budget: after this share of it, re-allot the
+    /// mutations to the path depths by the error their chains measured, instead of by b_k
+    /// alone (default 0: never)
+    #[arg(long, value_name = "S")]
+    pub reallot_at: Option<f64>,
     /// MMLT and tempered MMLT with --importance-pilot under a time budget: the pilot stops
     /// before it takes more than this share of the time (default 0.05; at least one sample per
     /// pixel)
@@ -230,6 +235,7 @@ impl IntegratorFlags {
             importance_pilot: self.importance_pilot,
             importance_floor: self.importance_floor,
             importance_power: self.importance_power,
+            reallot_at: self.reallot_at,
             importance_share: self.importance_share,
             importance_below: self.importance_below,
             hybrid: self.hybrid,

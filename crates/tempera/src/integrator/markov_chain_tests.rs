@@ -353,3 +353,34 @@ fn bridge_above_scales_the_depths_it_prefers_by_their_bridge_estimate() {
     // Seed 1 gives 2 and 5.
     assert!(scaled >= 1 && kept >= 1, "{scaled} scaled, {kept} kept: {:?}", a.chains);
 }
+
+/// Re-allotted by the measured error after a quarter of a time budget, every depth keeps its
+/// floor, the shares sum to one, each depth's mutations lie between the planned and the new
+/// share, and the image stays unbiased (BDPT agrees).
+#[test]
+fn mmlt_reallotted_by_measured_error_agrees_with_bdpt() {
+    let mut scene = crate::scenes::default_scene().build().unwrap();
+    scene.set_resolution(24, 24);
+    let m = MmltIntegrator { bootstrap: 50_000, chains: 16, reallot_at: 0.25, ..MmltIntegrator::new(5) };
+    let budget = Budget::Time(std::time::Duration::from_millis(3000));
+    let out = render_with(&scene, &m, budget, 3, 0);
+    let lit: Vec<_> = out.chains.iter().filter(|d| d.mutations > 0).collect();
+    let sum: f64 = lit.iter().map(|d| d.reallotted_share).sum();
+    assert!((sum - 1.0).abs() < 1e-9, "{:?}", out.chains);
+    let b_total: f64 = lit.iter().map(|d| d.b).sum();
+    let total: u64 = lit.iter().map(|d| d.mutations).sum();
+    let mut moved = 0.0f64;
+    for d in &lit {
+        let (planned, new) = (d.b / b_total, d.reallotted_share);
+        assert!(new >= crate::mcmc::adaptive::FLOOR * planned * 0.9, "depth {}: {new} vs {planned}", d.depth);
+        let share = d.mutations as f64 / total as f64;
+        let (lo, hi) = (planned.min(new), planned.max(new));
+        assert!(share > lo - 0.03 && share < hi + 0.03, "depth {}: {share} not in [{lo}, {hi}]", d.depth);
+        moved = moved.max((new - planned).abs());
+    }
+    assert!(moved > 0.02, "the measured error moved no depth's share: {:?}", out.chains);
+    let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(512), 1, 0);
+    let mean =
+        |img: &crate::texture::Image| img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64;
+    assert!((mean(&out.image) / mean(&bdpt.image) - 1.0).abs() < 0.04, "{} vs {}", mean(&out.image), mean(&bdpt.image));
+}

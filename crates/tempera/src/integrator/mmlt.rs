@@ -32,6 +32,10 @@ pub struct MmltIntegrator {
     /// The share of the chains' rays spent on further samples of the depths' normalisers as
     /// the render goes on ([`crate::mcmc::normaliser`]; 0: the bootstrap's alone).
     pub normaliser_share: f64,
+    /// Under a time budget, re-allot the mutations to the depths by their chains' measured
+    /// error after this share of it ([`crate::mcmc::adaptive`]); 0 (the default, MMLT as
+    /// published): by `b_k` throughout.
+    pub reallot_at: f64,
     /// Clamps each depth's target (`k ≥ 1`) at this many times the mean of its bootstrap's
     /// non-zero values, splatting a clamped state's whole contribution over the clamped value
     /// ([`crate::mcmc::Chain::start_clamped`]); 0 (the default, MMLT as published): never.
@@ -80,6 +84,7 @@ impl MmltIntegrator {
             depth_images: false,
             independent_below: 0,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
+            reallot_at: 0.0,
             target_clamp: 0.0,
             hybrid: 0.0,
             chain_efficiency: crate::mcmc::hybrid::DEFAULT_EFFICIENCY,
@@ -176,6 +181,7 @@ impl Integrator for MmltIntegrator {
             .with_group_images(self.depth_images)
             .with_independent_below(self.independent_below)
             .with_normaliser_share(self.normaliser_share)
+            .with_reallot_at(self.reallot_at)
             .with_clamp(self.target_clamp)
             .with_hybrid(self.hybrid)
             .with_chain_efficiency(self.chain_efficiency)
@@ -198,8 +204,9 @@ impl Integrator for MmltIntegrator {
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
         let depths = u64::from(self.max_depth) + 1;
         let hybrid = crate::mcmc::hybrid::film_buffers(self.hybrid, self.depth_images, depths);
-        // With the efficiency measured, the odd walkers' buffers of every depth.
-        let halves = if self.measure_efficiency { 2 } else { 1 };
+        // With the efficiency measured or the mutations re-allotted, the odd walkers' buffers
+        // of every depth.
+        let halves = if self.measure_efficiency || self.reallot_at > 0.0 { 2 } else { 1 };
         pixels(scene)
             .saturating_mul(12 + images + (halves * depths + hybrid) * SHARED_SPLAT_BYTES)
             .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))

@@ -127,6 +127,10 @@ pub struct DepthRecord {
     /// absent without it, or where the halves could not tell).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub measured_efficiency: f64,
+    /// The depth's share of the mutations after `--reallot-at` re-allotted them by the
+    /// measured error (absent where they were not).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub reallotted_share: f64,
     /// What the pilot of `--hybrid auto` measured and chose (depth 0's row only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hybrid_pilot: Option<super::hybrid_pilot::HybridChoice>,
@@ -241,6 +245,7 @@ impl DepthRecord {
             independent: d.independent,
             hybrid_samples: d.hybrid_samples,
             measured_efficiency: d.measured_efficiency,
+            reallotted_share: d.reallotted_share,
             hybrid_pilot: d.hybrid_choice,
             independent_acceptance: d.independent_acceptance,
             importance_pilot: d.importance_pilot,

@@ -243,6 +243,10 @@ pub struct IntegratorSettings {
     /// pilot's map predicts a relMSE below this ratio to MMLT's targets'.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub importance_below: Option<f64>,
+    /// MMLT and tempered MMLT under a time budget: re-allot the mutations to the depths by
+    /// their measured error after this share of the budget (0: never).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reallot_at: Option<f64>,
     /// MMLT: samples of bidirectional path tracing per main-chain mutation, combined with the
     /// chains by multiple importance sampling (0: the chains alone).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -395,6 +399,7 @@ impl IntegratorSettings {
             ("importance_power", self.importance_power.is_some(), kind == Mmlt || tempered),
             ("importance_share", self.importance_share.is_some(), kind == Mmlt || tempered),
             ("importance_below", self.importance_below.is_some(), kind == Mmlt || tempered),
+            ("reallot_at", self.reallot_at.is_some(), kind == Mmlt || tempered),
             ("hybrid", self.hybrid.is_some(), kind == Mmlt || tempered),
             ("chain_efficiency", self.chain_efficiency.is_some(), kind == Mmlt || tempered),
             ("hybrid_share", self.hybrid_share.is_some(), kind == Mmlt || tempered),
@@ -474,6 +479,7 @@ impl IntegratorSettings {
         check_probability("collapse_above", self.collapse_above)?;
         check_probability("collapse_below", self.collapse_below)?;
         check_range("normaliser_share", self.normaliser_share, 0.0..=1.0)?;
+        check_range("reallot_at", self.reallot_at, 0.0..=1.0)?;
         check_range("bridge_above", self.bridge_above, 0.0..=f64::INFINITY)?;
         check_range("bdpt_above", self.bdpt_above, 0.0..=f64::INFINITY)?;
         if self.hybrid.is_some_and(|r| !(0.0..=100.0).contains(&r.ratio())) {

@@ -61,6 +61,16 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
             "importance_power is not",
         ),
         (
+            IntegratorKind::Tempered,
+            IntegratorSettings { reallot_at: Some(1.5), ..Default::default() },
+            "reallot_at must",
+        ),
+        (
+            IntegratorKind::Bdpt,
+            IntegratorSettings { reallot_at: Some(0.25), ..Default::default() },
+            "reallot_at is not",
+        ),
+        (
             IntegratorKind::Mmlt,
             IntegratorSettings { importance_share: Some(0.9), ..Default::default() },
             "importance_share must",

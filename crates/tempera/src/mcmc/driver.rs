@@ -4,8 +4,9 @@
 //! Mutations are allotted to groups in proportion to `b` (Hachisuka et al. 2014 §5), or to `b`
 //! times the spread of the group's bootstrap values ([`Bootstrap::spread`]); a fixed
 //! budget runs in one round, a time budget in rounds of about one mutation per pixel until the
-//! deadline. Walkers are the unit of parallel work and splat into fixed-point buffers shared
-//! by the threads, so the image is bit-identical at any thread count.
+//! deadline, re-allotted once by the groups' measured error where asked ([`super::adaptive`]).
+//! Walkers are the unit of parallel work and splat into fixed-point buffers shared by the
+//! threads, so the image is bit-identical at any thread count.
 //!
 //! A walker splats into one or more layers per group. Layer `l`'s splats are normalised by
 //! `b_l / ρ_l`, where `b_l` is the mean of target `l` over the group's bootstrap and the large
@@ -80,6 +81,10 @@ pub struct ChainSettings {
     /// ([`super::bridge`]) instead of `b` where [`super::bridge::prefer`] says so at this
     /// threshold (`None`: never).
     pub bridge_above: Option<f64>,
+    /// Under a time budget, re-allot the mutations by the error each group's chains measure
+    /// after this share of the budget ([`super::adaptive`]; 0: by `b` throughout). Its walkers
+    /// splat in halves for the measurement ([`Group::odd`]).
+    pub reallot_at: f64,
 }
 
 /// Every group's bootstrap, made before the render ([`ChainSettings::bootstrap_groups`]),
@@ -126,95 +131,6 @@ pub(super) struct Group<L> {
 type Prepared<W> = Vec<Option<Group<Option<<W as Walker>::Group>>>>;
 
 impl ChainSettings {
-    pub fn new(bootstrap: usize, chains: usize, sigma: f32, large_step_probability: f32) -> Self {
-        Self {
-            bootstrap,
-            chains,
-            sigma,
-            large_step_probability,
-            spread_allocation: false,
-            spread_below: 0,
-            group_images: false,
-            independent_below: 0,
-            normaliser_share: super::normaliser::DEFAULT_SHARE,
-            clamp: 0.0,
-            hybrid: 0.0,
-            chain_efficiency: super::hybrid::DEFAULT_EFFICIENCY,
-            sample_share: None,
-            measure_efficiency: false,
-            bridge_above: None,
-        }
-    }
-
-    /// These settings with `ratio` samples of bidirectional path tracing per main-chain
-    /// mutation combined with the chains ([`super::hybrid`]; 0: none). Only for targets that
-    /// are MMLT's depths ([`Target::hybrid_depth`]).
-    pub fn with_hybrid(self, ratio: f64) -> Self {
-        Self { hybrid: ratio, ..self }
-    }
-
-    /// These settings with a main-chain mutation counting as `efficiency` independent samples
-    /// in the weights of [`Self::with_hybrid`].
-    pub fn with_chain_efficiency(self, efficiency: f64) -> Self {
-        Self { chain_efficiency: efficiency, ..self }
-    }
-
-    /// These settings with the independent samples of [`Self::with_hybrid`] weighted to carry
-    /// `share` of each depth's light (`None`: weights from the chain efficiency).
-    pub fn with_sample_share(self, share: Option<f64>) -> Self {
-        Self { sample_share: share, ..self }
-    }
-
-    /// These settings with each group's chain efficiency measured when `on` is set
-    /// ([`Self::measure_efficiency`]).
-    pub fn with_measured_efficiency(self, on: bool) -> Self {
-        Self { measure_efficiency: on, ..self }
-    }
-
-    /// These settings with each group's main layer scaled by its bridge estimate where `b`'s
-    /// relative error exceeds `above` ([`Self::bridge_above`]).
-    pub fn with_bridge_above(self, above: Option<f64>) -> Self {
-        Self { bridge_above: above, ..self }
-    }
-
-    /// These settings with clampable targets clamped at `clamp` times the mean of their
-    /// bootstrap's non-zero values (0: none).
-    pub fn with_clamp(self, clamp: f64) -> Self {
-        Self { clamp, ..self }
-    }
-
-    /// These settings with the depths whose bootstrap has fewer than `n` non-zero values
-    /// sampled independently (0: none).
-    pub fn with_independent_below(self, n: usize) -> Self {
-        Self { independent_below: n, ..self }
-    }
-
-    /// Whether group `boot` of `target` is sampled independently.
-    fn independent<T: Target>(&self, boot: &Bootstrap, target: &T) -> bool {
-        target.independent_depth().is_some() && (boot.nonzero() as usize) < self.independent_below
-    }
-
-    /// These settings with `share` of the chains' rays spent on further normaliser samples.
-    pub fn with_normaliser_share(self, share: f64) -> Self {
-        Self { normaliser_share: share, ..self }
-    }
-
-    /// These settings with one image per group developed beside the image when `on` is set.
-    pub fn with_group_images(self, on: bool) -> Self {
-        Self { group_images: on, ..self }
-    }
-
-    /// These settings with the spread counting only for the groups whose bootstrap holds fewer
-    /// than `n` non-zero values (0: for every group).
-    pub fn with_spread_below(self, n: usize) -> Self {
-        Self { spread_below: n, ..self }
-    }
-
-    /// These settings with mutations allotted by `b` times spread when `spread` is set.
-    pub fn with_spread_allocation(self, spread: bool) -> Self {
-        Self { spread_allocation: spread, ..self }
-    }
-
     /// Renders with `groups` independent sets of walkers (MMLT: one per path depth; PSSMLT:
     /// one), group `k` bootstrapped under `targets(k)` (or taken from `bootstraps`, made by
     /// [`Self::bootstrap_groups`] under the same seed and targets: the same image without
@@ -338,7 +254,6 @@ impl ChainSettings {
         };
         let total: f64 = boots.iter().map(|b| self.weight(b)).sum();
         let shares: Vec<f64> = boots.iter().map(|b| self.weight(b) / total).collect();
-        let share = |k: usize| shares[k];
         let mut topup = Topup::new(&boots, &shares, self.normaliser_share);
         let budget = match settings.budget {
             Budget::Samples(mpp) => Some(u64::from(mpp) * pixels),
@@ -353,8 +268,10 @@ impl ChainSettings {
         let independent_depths: Vec<usize> =
             (0..groups).filter(|&k| independent[k] && iplan.iter().any(|s| s.group == k)).collect();
         // A time budget's rounds of about one mutation per pixel, shared as the fixed budget is.
-        let round_quota =
-            |slot: &Slot| ((share(slot.group) * pixels as f64 / slot.walkers as f64).round() as u64).max(1);
+        let quota_at = |shares: &[f64], slot: &Slot| {
+            ((shares[slot.group] * pixels as f64 / slot.walkers as f64).round() as u64).max(1)
+        };
+        let round_quota = |slot: &Slot| quota_at(&shares, slot);
         // One footprint of the film's filter for every splat buffer.
         let footprint = Footprint::of(&scene.film);
         let kappa = super::efficiency::filter_energy(&footprint);
@@ -365,6 +282,13 @@ impl ChainSettings {
         let mut hybrids: Vec<Hybrid> =
             hybrid.plan.iter().map(|slot| Hybrid::new(seed, slot.index, hybrid.plan.len())).collect();
         let levels = hybrid.levels(groups);
+        // When the mutations are re-allotted by the groups' measured error ([`super::adaptive`]).
+        let mut reallot_after = match settings.budget {
+            Budget::Time(t) if self.reallot_at > 0.0 && hybrid.depths.is_empty() => {
+                Some(t.mul_f64(self.reallot_at.min(1.0)))
+            }
+            _ => None,
+        };
         // The bridge estimates' levels: each group's bootstrap mean.
         let bridges: Vec<f32> = boots.iter().map(|b| b.b() as f32).collect();
         // Walkers start from bootstrap states drawn in proportion to their value.
@@ -393,7 +317,7 @@ impl ChainSettings {
             &plan,
             &mut walkers,
             seed,
-            (&clamps, &levels, &bridges, self.measure_efficiency),
+            (&clamps, &levels, &bridges, self.measure_efficiency || reallot_after.is_some()),
             &footprint,
             &stop,
         );
@@ -489,6 +413,8 @@ impl ChainSettings {
                 ..out
             }
         };
+        // The shares after the mutations were re-allotted, where they were.
+        let mut reallotted: Option<Vec<f64>> = None;
         match budget {
             // A fixed budget: one round, each walker its share of its group's mutations.
             Some(m) => {
@@ -501,14 +427,23 @@ impl ChainSettings {
             None => {
                 let mut snapshots = render.snapshots(settings.budget);
                 // The main-chain mutations a whole round makes, on every rank together.
-                let per_round: u64 = plan.iter().map(round_quota).sum();
-                let mut rounds = 0u64;
+                let mut now = shares.clone();
+                let mut per_round: u64 = plan.iter().map(round_quota).sum();
+                let mut made = 0u64;
                 while !cluster.broadcast(stop()) {
-                    run_round(&mut walkers, &mut independents, &mut hybrids, &round_quota);
+                    run_round(&mut walkers, &mut independents, &mut hybrids, &|slot: &Slot| quota_at(&now, slot));
                     // The normalisers keep pace with the rounds finished on every rank.
                     if !cluster.broadcast(stop()) {
-                        rounds += 1;
-                        topup.run(&mut boots, targets, seed, rounds * per_round, &|| false);
+                        made += per_round;
+                        topup.run(&mut boots, targets, seed, made, &|| false);
+                    }
+                    if reallot_after.is_some_and(|at| cluster.broadcast(started.elapsed() >= at)) {
+                        reallot_after = None;
+                        let out = developed(&boots, topup.rays, &walkers, &independents, &hybrids, 0.0);
+                        let summed = cluster.is_distributed().then(|| sum_splats(cluster, &prepared));
+                        now = super::adaptive::reallot(cluster, &out, &prepared, summed.as_deref(), &plan, &now);
+                        per_round = plan.iter().map(|slot| quota_at(&now, slot)).sum();
+                        reallotted = Some(now.clone());
                     }
                     if cluster.broadcast(snapshots.is_due(render)) {
                         let out = developed(&boots, topup.rays, &walkers, &independents, &hybrids, 0.0);
@@ -521,6 +456,9 @@ impl ChainSettings {
             }
         }
         let mut out = developed(&boots, topup.rays, &walkers, &independents, &hybrids, 0.0);
+        for (d, &share) in out.chains.iter_mut().zip(reallotted.iter().flatten()) {
+            d.reallotted_share = share;
+        }
         render.finish(&mut out.stats);
         Ok(out)
     }

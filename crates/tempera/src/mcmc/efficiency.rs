@@ -80,6 +80,29 @@ impl Halves<'_> {
     /// no mutations, the halves do not differ or the independent samples' variance comes out
     /// non-positive.
     pub fn efficiency(&self, b: f64, g2: f64, kappa: f64) -> Option<f64> {
+        let (chain, squares) = self.difference(b, None)?;
+        let (w, h) = (self.even.width, self.even.height);
+        let pixels = f64::from(w) * f64::from(h);
+        let m = (self.mutations.0 + self.mutations.1) as f64;
+        let iid = (pixels * pixels * b * b * g2 * kappa - squares + chain) / m;
+        if !(chain > 0.0 && iid > 0.0 && iid.is_finite()) {
+            return None;
+        }
+        Some((iid / chain).clamp(RANGE.0, RANGE.1))
+    }
+
+    /// The variance of the depth's image (normalisation `b`) summed over its pixels, each
+    /// weighted by `weights` (row by row), as the halves' difference estimates it; `None` where
+    /// a half made no mutations or the weights do not fit the image.
+    pub fn weighted_variance(&self, b: f64, weights: &[f64]) -> Option<f64> {
+        if weights.len() != self.even.width as usize * self.even.height as usize {
+            return None;
+        }
+        self.difference(b, Some(weights)).map(|(chain, _)| chain)
+    }
+
+    /// `V_chain` (with each pixel's term weighted by `weights`, if given) and `Σ_p J_p²`.
+    fn difference(&self, b: f64, weights: Option<&[f64]>) -> Option<(f64, f64)> {
         let (me, mo) = (self.mutations.0 as f64, self.mutations.1 as f64);
         if me == 0.0 || mo == 0.0 {
             return None;
@@ -90,18 +113,14 @@ impl Halves<'_> {
         let scale = pixels * b / m;
         let (even, odd) = (self.even.image(scale), self.odd.image(scale));
         let (mut chain, mut squares) = (0.0, 0.0);
-        for (e, o) in even.pixels.iter().zip(&odd.pixels) {
+        for (i, (e, o)) in even.pixels.iter().zip(&odd.pixels).enumerate() {
             let (e, o) = (f64::from(luminance(*e)), f64::from(luminance(*o)));
             let d = e * m / (2.0 * me) - o * m / (2.0 * mo);
-            chain += d * d;
+            chain += d * d * weights.map_or(1.0, |w| w[i]);
             squares += (e + o) * (e + o);
         }
         chain /= m / 4.0 * (1.0 / me + 1.0 / mo);
-        let iid = (pixels * pixels * b * b * g2 * kappa - squares + chain) / m;
-        if !(chain > 0.0 && iid > 0.0 && iid.is_finite()) {
-            return None;
-        }
-        Some((iid / chain).clamp(RANGE.0, RANGE.1))
+        Some((chain, squares))
     }
 }
 

@@ -5,6 +5,7 @@
 //! ([`driver`]), and their statistics.
 
 pub mod acceptance;
+pub mod adaptive;
 pub mod all_strategies;
 pub mod bootstrap;
 pub mod bridge;
@@ -12,6 +13,7 @@ pub mod chain;
 mod develop;
 pub mod direct;
 pub mod driver;
+mod driver_settings;
 pub mod efficiency;
 pub mod full;
 pub mod hybrid;

@@ -57,6 +57,9 @@ pub struct DepthStats {
     /// chains' own density, as measured from the walkers' halves ([`super::efficiency`]; 0: not
     /// measured). Set when the image is developed.
     pub measured_efficiency: f64,
+    /// The group's share of the mutations after they were re-allotted by the measured error
+    /// ([`super::adaptive`]; 0: not re-allotted).
+    pub reallotted_share: f64,
     /// The time and rays the render took before its first round (every group's bootstrap and
     /// preparation), in depth 0's row: the pilot of `--hybrid auto` measures the chains' work
     /// without them.

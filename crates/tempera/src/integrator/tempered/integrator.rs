@@ -123,6 +123,9 @@ pub struct TemperedIntegrator {
     /// The share of the chains' rays spent on further samples of the depths' normalisers as
     /// the render goes on ([`crate::mcmc::normaliser`]; 0: the bootstrap's alone).
     pub normaliser_share: f64,
+    /// Under a time budget, re-allot the mutations to the depths by their measured error after
+    /// this share of it ([`crate::mcmc::adaptive`]; 0: never).
+    pub reallot_at: f64,
     /// Render by bidirectional path tracing alone where the bootstrap's
     /// [`independent_acceptance`] exceeds this: the scene's light is found as well by
     /// independent samples as by chains, and BDPT, which values every strategy of every depth
@@ -198,6 +201,7 @@ impl TemperedIntegrator {
             // none and 20 (README, "Independent samples where the chains cannot start").
             independent_below: 40,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
+            reallot_at: 0.0,
             bdpt_above: Some(DEFAULT_BDPT_ABOVE),
             // Shaped where the pilot predicts a large gain: measured against none (README,
             // "A cheaper pilot, and a choice of where to shape").
@@ -229,6 +233,7 @@ impl TemperedIntegrator {
             reuse_replicas: false,
             independent_below: 0,
             normaliser_share: 0.0,
+            reallot_at: 0.0,
             bridge_above: None,
             bdpt_above: None,
             hybrid: 0.0,
@@ -442,8 +447,9 @@ impl Integrator for TemperedIntegrator {
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
         let depths = u64::from(self.max_depth) + 1;
         let hybrid = crate::mcmc::hybrid::film_buffers(self.hybrid, self.depth_images, depths);
-        // With the efficiency measured, the odd walkers' buffers of every depth.
-        let halves = if self.measure_efficiency { 2 } else { 1 };
+        // With the efficiency measured or the mutations re-allotted, the odd walkers' buffers
+        // of every depth.
+        let halves = if self.measure_efficiency || self.reallot_at > 0.0 { 2 } else { 1 };
         pixels(scene)
             .saturating_mul(12 + images + (halves * depths * layers + hybrid) * SHARED_SPLAT_BYTES)
             .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
@@ -470,6 +476,7 @@ impl TemperedIntegrator {
             .with_group_images(self.depth_images)
             .with_independent_below(self.independent_below)
             .with_normaliser_share(self.normaliser_share)
+            .with_reallot_at(self.reallot_at)
             .with_hybrid(self.hybrid)
             .with_chain_efficiency(self.chain_efficiency)
             .with_sample_share(self.sample_share)
