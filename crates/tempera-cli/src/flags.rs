@@ -71,7 +71,8 @@ pub struct IntegratorFlags {
     pub importance_power: Option<f64>,
     /// MMLT and tempered MMLT under a time budget: after this share of it, re-allot the
     /// mutations to the path depths by the error their chains measured, instead of by b_k
-    /// alone (default 0: never)
+    /// alone, where they have made 160 mutations per pixel by then (default: 0, never, for
+    /// MMLT; 0.25 for tempered MMLT)
     #[arg(long, value_name = "S")]
     pub reallot_at: Option<f64>,
     /// MMLT and tempered MMLT with --importance-pilot under a time budget: the pilot stops

@@ -354,14 +354,15 @@ fn bridge_above_scales_the_depths_it_prefers_by_their_bridge_estimate() {
     assert!(scaled >= 1 && kept >= 1, "{scaled} scaled, {kept} kept: {:?}", a.chains);
 }
 
-/// Re-allotted by the measured error after a quarter of a time budget, every depth keeps its
+/// Re-allotted by the measured error after 40 % of a time budget, every depth keeps its
 /// floor, the shares sum to one, each depth's mutations lie between the planned and the new
-/// share, and the image stays unbiased (BDPT agrees).
+/// share, and the image stays unbiased (BDPT agrees); due before the chains can be measured,
+/// it keeps the plan.
 #[test]
 fn mmlt_reallotted_by_measured_error_agrees_with_bdpt() {
     let mut scene = crate::scenes::default_scene().build().unwrap();
     scene.set_resolution(24, 24);
-    let m = MmltIntegrator { bootstrap: 50_000, chains: 16, reallot_at: 0.25, ..MmltIntegrator::new(5) };
+    let m = MmltIntegrator { bootstrap: 50_000, chains: 16, reallot_at: 0.4, ..MmltIntegrator::new(5) };
     let budget = Budget::Time(std::time::Duration::from_millis(3000));
     let out = render_with(&scene, &m, budget, 3, 0);
     let lit: Vec<_> = out.chains.iter().filter(|d| d.mutations > 0).collect();
@@ -383,4 +384,10 @@ fn mmlt_reallotted_by_measured_error_agrees_with_bdpt() {
     let mean =
         |img: &crate::texture::Image| img.pixels.iter().map(|p| f64::from(p.y)).sum::<f64>() / img.pixels.len() as f64;
     assert!((mean(&out.image) / mean(&bdpt.image) - 1.0).abs() < 0.04, "{} vs {}", mean(&out.image), mean(&bdpt.image));
+    // Due before the chains have made enough mutations to measure (after the first round of
+    // about one per pixel), the re-allotment keeps the planned shares.
+    let early = MmltIntegrator { reallot_at: 0.001, ..m };
+    let out = render_with(&scene, &early, Budget::Time(std::time::Duration::from_millis(500)), 3, 0);
+    assert!(out.chains.iter().all(|d| d.reallotted_share == 0.0), "{:?}", out.chains);
+    assert!(out.chains.iter().any(|d| d.mutations > 0));
 }

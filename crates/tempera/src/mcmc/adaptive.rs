@@ -18,7 +18,8 @@
 //! [`super::importance::DEFAULT_FLOOR`]), and `c_k` is the group's chain seconds per mutation
 //! so far. The rest of the budget then runs at the new shares; a group keeps at least
 //! [`FLOOR`] of its planned share, so that a depth whose halves have not met its light yet is
-//! not starved. Any allotment leaves each group's image unbiased (each is scaled by its own
+//! not starved. Where the chains have made fewer than [`MIN_MUTATIONS_PER_PIXEL`] by then, the
+//! halves are too noisy to act on and the plan stands. Any allotment leaves each group's image unbiased (each is scaled by its own
 //! `b_k/M_k`).
 
 use super::driver::{Group, Slot};
@@ -32,6 +33,14 @@ use crate::texture::Image;
 
 /// The least share of its planned share a group keeps.
 pub const FLOOR: f64 = 0.25;
+
+/// The main-chain mutations per pixel the chains must have made for their halves to be
+/// measured: below, the render keeps the planned shares. Tempered MMLT's 10-s renders of the
+/// twin caustics, re-allotted after a quarter of the budget (about 90 mutations per pixel),
+/// measured 1.27× the error of the planned shares over 24 seeds, through a few seeds whose
+/// early halves differed by one rare bright path; its 30-s ones (about 280) 1.04×, its 90-s
+/// ones 0.82× (README, "Re-allotted by the measured error").
+pub const MIN_MUTATIONS_PER_PIXEL: f64 = 160.0;
 
 /// Per pixel of `image`, the weight `1/(Ī_p² + φ²)` of its error, `Ī` the luminance averaged
 /// over the 3×3 pixels around it (fewer at the borders) and `φ = floor · mean`; `None` where
@@ -114,8 +123,9 @@ pub fn shares(planned: &[f64], measured: &[Option<(f64, f64)>]) -> Vec<f64> {
 /// The shares for the rest of the render, from the render so far (`out`, developed at rank 0
 /// from every rank's walkers; `summed`: the groups' buffers summed over the ranks, where the
 /// render is distributed), its groups, its walkers' `plan` and the shares it ran at: rank 0's
-/// measurement, the same on every rank. Groups splatted in halves with one layer are measured;
-/// the others keep their share.
+/// measurement, the same on every rank; `None` where the chains have made fewer than
+/// [`MIN_MUTATIONS_PER_PIXEL`]. Groups splatted in halves with one layer are measured; the
+/// others keep their share.
 pub(super) fn reallot<L: Layers>(
     cluster: &dyn Cluster,
     out: &RenderOutput,
@@ -123,7 +133,12 @@ pub(super) fn reallot<L: Layers>(
     summed: Option<&[Vec<SharedSplats>]>,
     plan: &[Slot],
     planned: &[f64],
-) -> Vec<f64> {
+) -> Option<Vec<f64>> {
+    let pixels = (out.image.width * out.image.height).max(1) as f64;
+    let mutations: u64 = out.chains.iter().map(|d| d.mutations).sum();
+    if !cluster.broadcast(mutations as f64 >= MIN_MUTATIONS_PER_PIXEL * pixels) {
+        return None;
+    }
     let floor = super::importance::DEFAULT_FLOOR;
     let measured: Vec<Option<(f64, f64)>> = match weights(&out.image, floor) {
         Some(weights) => (0..planned.len())
@@ -146,7 +161,7 @@ pub(super) fn reallot<L: Layers>(
             .collect(),
         None => vec![None; planned.len()],
     };
-    from_root(cluster, &shares(planned, &measured))
+    Some(from_root(cluster, &shares(planned, &measured)))
 }
 
 /// Rank 0's `values` on every rank (the others add zeros to their bits in an exact integer

@@ -126,6 +126,16 @@ pub(super) struct Group<L> {
     pub seconds: f64,
 }
 
+/// Which groups' walkers splat in halves ([`Group::odd`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Halves {
+    None,
+    /// The groups with one layer (the re-allotment measures those alone).
+    SingleLayer,
+    /// Every group (the chain efficiency is measured for every one).
+    Every,
+}
+
 /// Every group's preparation (`None`: a group without walkers); a group sampled
 /// independently shares nothing (`shared` is `None`).
 type Prepared<W> = Vec<Option<Group<Option<<W as Walker>::Group>>>>;
@@ -317,7 +327,16 @@ impl ChainSettings {
             &plan,
             &mut walkers,
             seed,
-            (&clamps, &levels, &bridges, self.measure_efficiency || reallot_after.is_some()),
+            (
+                &clamps,
+                &levels,
+                &bridges,
+                match (self.measure_efficiency, reallot_after.is_some()) {
+                    (true, _) => Halves::Every,
+                    (false, true) => Halves::SingleLayer,
+                    (false, false) => Halves::None,
+                },
+            ),
             &footprint,
             &stop,
         );
@@ -441,9 +460,13 @@ impl ChainSettings {
                         reallot_after = None;
                         let out = developed(&boots, topup.rays, &walkers, &independents, &hybrids, 0.0);
                         let summed = cluster.is_distributed().then(|| sum_splats(cluster, &prepared));
-                        now = super::adaptive::reallot(cluster, &out, &prepared, summed.as_deref(), &plan, &now);
-                        per_round = plan.iter().map(|slot| quota_at(&now, slot)).sum();
-                        reallotted = Some(now.clone());
+                        if let Some(new) =
+                            super::adaptive::reallot(cluster, &out, &prepared, summed.as_deref(), &plan, &now)
+                        {
+                            now = new;
+                            per_round = plan.iter().map(|slot| quota_at(&now, slot)).sum();
+                            reallotted = Some(now.clone());
+                        }
                     }
                     if cluster.broadcast(snapshots.is_due(render)) {
                         let out = developed(&boots, topup.rays, &walkers, &independents, &hybrids, 0.0);
@@ -472,7 +495,7 @@ impl ChainSettings {
         plan: &[Slot],
         walkers: &mut [W],
         seed: u64,
-        (clamps, levels, bridges, halves): (&[f32], &[f32], &[f32], bool),
+        (clamps, levels, bridges, halves): (&[f32], &[f32], &[f32], Halves),
         footprint: &std::sync::Arc<Footprint>,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> (Prepared<W>, u64) {
@@ -509,7 +532,8 @@ impl ChainSettings {
             rays += r;
             let splats = (0..shared.count()).map(|_| SharedSplats::filtered(footprint)).collect();
             // Halves need a walker in each.
-            let odd = if halves && plan.iter().any(|s| s.group == k && s.index == 1) {
+            let split = halves == Halves::Every || (halves == Halves::SingleLayer && shared.count() == 1);
+            let odd = if split && plan.iter().any(|s| s.group == k && s.index == 1) {
                 (0..shared.count()).map(|_| SharedSplats::filtered(footprint)).collect()
             } else {
                 Vec::new()

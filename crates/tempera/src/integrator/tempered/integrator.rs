@@ -124,7 +124,8 @@ pub struct TemperedIntegrator {
     /// the render goes on ([`crate::mcmc::normaliser`]; 0: the bootstrap's alone).
     pub normaliser_share: f64,
     /// Under a time budget, re-allot the mutations to the depths by their measured error after
-    /// this share of it ([`crate::mcmc::adaptive`]; 0: never).
+    /// this share of it, where the chains have made enough mutations by then to measure
+    /// ([`crate::mcmc::adaptive`]; 0: never).
     pub reallot_at: f64,
     /// Render by bidirectional path tracing alone where the bootstrap's
     /// [`independent_acceptance`] exceeds this: the scene's light is found as well by
@@ -201,7 +202,9 @@ impl TemperedIntegrator {
             // none and 20 (README, "Independent samples where the chains cannot start").
             independent_below: 40,
             normaliser_share: crate::mcmc::normaliser::DEFAULT_SHARE,
-            reallot_at: 0.0,
+            // Measured against the allotment by b_k alone (README, "Re-allotted by the
+            // measured error").
+            reallot_at: 0.25,
             bdpt_above: Some(DEFAULT_BDPT_ABOVE),
             // Shaped where the pilot predicts a large gain: measured against none (README,
             // "A cheaper pilot, and a choice of where to shape").
@@ -447,11 +450,17 @@ impl Integrator for TemperedIntegrator {
         let images = if self.depth_images { 12 * (u64::from(self.max_depth) + 1) } else { 0 };
         let depths = u64::from(self.max_depth) + 1;
         let hybrid = crate::mcmc::hybrid::film_buffers(self.hybrid, self.depth_images, depths);
-        // With the efficiency measured or the mutations re-allotted, the odd walkers' buffers
-        // of every depth.
-        let halves = if self.measure_efficiency || self.reallot_at > 0.0 { 2 } else { 1 };
+        // With the efficiency measured, the odd walkers' buffers of every depth's layers; with
+        // the mutations re-allotted, of every depth's single layer.
+        let halves = if self.measure_efficiency {
+            depths * layers
+        } else if self.reallot_at > 0.0 {
+            depths
+        } else {
+            0
+        };
         pixels(scene)
-            .saturating_mul(12 + images + (halves * depths * layers + hybrid) * SHARED_SPLAT_BYTES)
+            .saturating_mul(12 + images + (depths * layers + halves + hybrid) * SHARED_SPLAT_BYTES)
             .saturating_add(crate::mcmc::shared_bootstrap_bytes(self.bootstrap, depths as usize))
     }
 }
