@@ -19,8 +19,8 @@
 //! so far. The rest of the budget then runs at the new shares; a group keeps at least
 //! [`FLOOR`] of its planned share, so that a depth whose halves have not met its light yet is
 //! not starved. Where the chains have made fewer than [`MIN_MUTATIONS_PER_PIXEL`] by then, the
-//! halves are too noisy to act on and the plan stands. Any allotment leaves each group's image unbiased (each is scaled by its own
-//! `b_k/M_k`).
+//! halves are too noisy to act on and the plan stands. Any allotment leaves each group's image
+//! unbiased (each is scaled by its own `b_k/M_k`).
 
 use super::driver::{Group, Slot};
 use super::efficiency::Halves;
