@@ -46,33 +46,16 @@ pub const MIN_MUTATIONS_PER_PIXEL: f64 = 160.0;
 /// over the 3×3 pixels around it (fewer at the borders) and `φ = floor · mean`; `None` where
 /// the image has no light.
 pub fn weights(image: &Image, floor: f64) -> Option<Vec<f64>> {
-    let (w, h) = (image.width, image.height);
-    let y: Vec<f64> = image
-        .pixels
-        .iter()
-        .map(|&p| f64::from(luminance(p)))
-        .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
-        .collect();
-    let mean = y.iter().sum::<f64>() / y.len().max(1) as f64;
+    let y: Vec<f32> =
+        image.pixels.iter().map(|&p| luminance(p)).map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 }).collect();
+    let mean = y.iter().map(|&v| f64::from(v)).sum::<f64>() / y.len().max(1) as f64;
     let phi2 = (floor * mean).powi(2);
     if !(phi2 > 0.0 && phi2.is_finite()) {
         return None;
     }
-    let mut out = Vec::with_capacity(y.len());
-    for j in 0..h {
-        for i in 0..w {
-            let (mut sum, mut n) = (0.0, 0.0);
-            for jj in j.saturating_sub(1)..(j + 2).min(h) {
-                for ii in i.saturating_sub(1)..(i + 2).min(w) {
-                    sum += y[jj * w + ii];
-                    n += 1.0;
-                }
-            }
-            let smooth = sum / n;
-            out.push(1.0 / (smooth * smooth + phi2));
-        }
-    }
-    Some(out)
+    let smooth =
+        super::importance::neighbourhood(image.width, image.height, &y, 1, |v| v.iter().sum::<f32>() / v.len() as f32);
+    Some(smooth.iter().map(|&s| 1.0 / (f64::from(s).powi(2) + phi2)).collect())
 }
 
 /// A group's measured error constant `a_k` (its image's weighted variance times its

@@ -445,7 +445,8 @@ impl ChainSettings {
             // between rounds.
             None => {
                 let mut snapshots = render.snapshots(settings.budget);
-                // The main-chain mutations a whole round makes, on every rank together.
+                // The shares the rounds run at, and the main-chain mutations a whole round makes,
+                // on every rank together.
                 let mut now = shares.clone();
                 let mut per_round: u64 = plan.iter().map(round_quota).sum();
                 let mut made = 0u64;
