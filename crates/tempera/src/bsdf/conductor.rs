@@ -1,7 +1,7 @@
 //! Conductors: GGX microfacet reflection with complex Fresnel, perfectly specular when alpha is
 //! (near) zero (pbrt-v4 §9.4, §9.6).
 
-use super::{BsdfSample, Ggx, fresnel, same_hemisphere};
+use super::{BsdfSample, Ggx, SampleInverse, fresnel, same_hemisphere};
 use crate::math::{Rgb, Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug)]
@@ -75,5 +75,21 @@ impl Conductor {
         }
         let pdf = self.distribution.pdf(wo, wm) / (4.0 * wo.dot(wm).abs());
         Some(BsdfSample { f: self.microfacet(wo, wi), wi, pdf, delta: false, transmission: false, proportional: false })
+    }
+
+    /// The numbers with which [`Self::sample`] produces `wi` from `wo`: none matter for a
+    /// smooth conductor (whose one direction the caller checks), the visible normal's sample
+    /// for a rough one.
+    pub fn sample_inverse(&self, wo: Vec3, wi: Vec3) -> Option<SampleInverse> {
+        if wo.z == 0.0 || !same_hemisphere(wo, wi) {
+            return None;
+        }
+        if self.distribution.effectively_smooth() {
+            return Some(SampleInverse { uc: None, u: None });
+        }
+        let wm = (wo + wi).normalize();
+        let wm = if wm.z < 0.0 { -wm } else { wm };
+        let u = self.distribution.sample_wm_inverse(wo, wm)?;
+        Some(SampleInverse { uc: None, u: Some(u) })
     }
 }

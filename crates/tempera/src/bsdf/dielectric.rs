@@ -3,7 +3,7 @@
 //! Surfaces"; pbrt-v4 §9.5, §9.7). `eta` is the inside index over the outside index; the
 //! outside is the +z side. Radiance crossing the interface is scaled by `1/η'²`.
 
-use super::{BsdfSample, Ggx, TransportMode, fresnel, same_hemisphere};
+use super::{BsdfSample, Ggx, SampleInverse, TransportMode, fresnel, same_hemisphere};
 use crate::math::{Rgb, Vec2, Vec3};
 
 /// Which lobes of a dielectric interface to sample or value (layered BSDFs ask for one).
@@ -152,6 +152,24 @@ impl Dielectric {
             }
             Some(BsdfSample { f: Rgb::splat(ft), wi, pdf, delta: false, transmission: true, proportional: false })
         }
+    }
+
+    /// The numbers with which [`Self::sample`] produces `wi` from `wo`: the interval of the
+    /// lobe-choosing number that picks reflection or transmission (by the Fresnel term, as
+    /// sampling does) and, for a rough interface, the visible normal's sample.
+    pub fn sample_inverse(&self, wo: Vec3, wi: Vec3) -> Option<SampleInverse> {
+        if wo.z == 0.0 || wi.z == 0.0 {
+            return None;
+        }
+        let reflect = same_hemisphere(wo, wi);
+        let (r, u) = if self.is_delta() {
+            (fresnel::dielectric(wo.z, self.eta), None)
+        } else {
+            let (wm, _, _) = self.half_vector(wo, wi)?;
+            (fresnel::dielectric(wo.dot(wm), self.eta), Some(self.distribution.sample_wm_inverse(wo, wm)?))
+        };
+        let uc = if reflect { (0.0, r) } else { (r, 1.0) };
+        (uc.1 > uc.0).then_some(SampleInverse { uc: Some(uc), u })
     }
 
     fn sample_smooth(&self, wo: Vec3, uc: f32, mode: TransportMode, lobes: Lobes) -> Option<BsdfSample> {

@@ -1,7 +1,7 @@
 //! Lambertian reflection with cosine-weighted sampling (pbrt-v4 §9.2).
 
-use super::{BsdfSample, same_hemisphere};
-use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
+use super::{BsdfSample, SampleInverse, same_hemisphere};
+use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_inverse, cosine_hemisphere_pdf};
 use crate::math::{Rgb, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -35,5 +35,14 @@ impl Diffuse {
             transmission: false,
             proportional: false,
         })
+    }
+
+    /// The numbers with which [`Self::sample`] produces `wi` from `wo`.
+    pub fn sample_inverse(&self, wo: Vec3, wi: Vec3) -> Option<SampleInverse> {
+        if wo.z == 0.0 || !same_hemisphere(wo, wi) {
+            return None;
+        }
+        let u = cosine_hemisphere_inverse(Vec3::new(wi.x, wi.y, wi.z.abs()));
+        Some(SampleInverse { uc: None, u: Some(u) })
     }
 }

@@ -3,7 +3,7 @@
 //! Distribution of Visible Normals", JCGT 7(4); pbrt-v4 §9.6). Directions are in the local
 //! shading frame (normal = +z).
 
-use crate::math::warp::polar_disk;
+use crate::math::warp::{polar_disk, polar_disk_inverse};
 use crate::math::{Vec2, Vec3, safe_sqrt};
 use std::f32::consts::PI;
 
@@ -93,12 +93,7 @@ impl Ggx {
 
     /// Samples a visible normal (upper hemisphere) as seen from `w`.
     pub fn sample_wm(&self, w: Vec3, u: Vec2) -> Vec3 {
-        let mut wh = Vec3::new(self.alpha_x * w.x, self.alpha_y * w.y, w.z).normalize();
-        if wh.z < 0.0 {
-            wh = -wh;
-        }
-        let t1 = if wh.z < 0.99999 { Vec3::Z.cross(wh).normalize() } else { Vec3::X };
-        let t2 = wh.cross(t1);
+        let (wh, t1, t2) = self.visible_frame(w);
         let mut p = polar_disk(u);
         let h = safe_sqrt(1.0 - p.x * p.x);
         let s = (1.0 + wh.z) * 0.5;
@@ -106,6 +101,34 @@ impl Ggx {
         let pz = safe_sqrt(1.0 - p.length_squared());
         let nh = p.x * t1 + p.y * t2 + pz * wh;
         Vec3::new(self.alpha_x * nh.x, self.alpha_y * nh.y, nh.z.max(1e-6)).normalize()
+    }
+
+    /// The stretched view direction `wh` (upper hemisphere) of [`Self::sample_wm`] and the two
+    /// tangents of the disk its samples are projected from.
+    fn visible_frame(&self, w: Vec3) -> (Vec3, Vec3, Vec3) {
+        let mut wh = Vec3::new(self.alpha_x * w.x, self.alpha_y * w.y, w.z).normalize();
+        if wh.z < 0.0 {
+            wh = -wh;
+        }
+        let t1 = if wh.z < 0.99999 { Vec3::Z.cross(wh).normalize() } else { Vec3::X };
+        let t2 = wh.cross(t1);
+        (wh, t1, t2)
+    }
+
+    /// The sample `u` with which [`Self::sample_wm`] produces the normal `wm` (upper
+    /// hemisphere) seen from `w`, undoing its steps in reverse order (Bitterli et al. 2017,
+    /// "Reversible Jump Metropolis Light Transport using Inverse Mappings", §5); `None` where
+    /// `wm` is not visible from `w`.
+    pub fn sample_wm_inverse(&self, w: Vec3, wm: Vec3) -> Option<Vec2> {
+        let (wh, t1, t2) = self.visible_frame(w);
+        let nh = Vec3::new(wm.x / self.alpha_x, wm.y / self.alpha_y, wm.z).normalize();
+        if !(nh.dot(wh) >= 0.0) {
+            return None;
+        }
+        let (px, py) = (nh.dot(t1), nh.dot(t2));
+        let h = safe_sqrt(1.0 - px * px);
+        let s = (1.0 + wh.z) * 0.5;
+        Some(polar_disk_inverse(Vec2::new(px, (py - (1.0 - s) * h) / s)))
     }
 }
 

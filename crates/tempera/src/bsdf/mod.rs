@@ -48,6 +48,15 @@ pub struct BsdfSample {
     pub proportional: bool,
 }
 
+/// The numbers with which [`Bsdf::sample`] produces a given direction (the inverse mapping of
+/// Bitterli et al. 2017): the interval of `uc` that chooses the direction's lobe, and the
+/// direction sample `u`; `None` where any value does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleInverse {
+    pub uc: Option<(f32, f32)>,
+    pub u: Option<Vec2>,
+}
+
 #[inline]
 pub(crate) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
     a.z * b.z > 0.0
@@ -103,6 +112,23 @@ impl Bsdf {
             Bsdf::Layered(b) => b.sample(wo, uc, u, mode),
         }?;
         (s.pdf > 0.0 && s.f.is_finite() && s.wi.z != 0.0).then_some(s)
+    }
+
+    /// Whether [`Self::sample_inverse`] inverts this BSDF's sampling: diffuse, conductor and
+    /// dielectric BSDFs (a layered one samples by a random walk, which no numbers invert).
+    pub fn invertible(&self) -> bool {
+        matches!(self, Bsdf::Diffuse(_) | Bsdf::Conductor(_) | Bsdf::Dielectric(_))
+    }
+
+    /// The numbers with which [`Self::sample`] produces `wi` from `wo` ([`SampleInverse`]);
+    /// `None` where no numbers do, or the BSDF is not [`Self::invertible`].
+    pub fn sample_inverse(&self, wo: Vec3, wi: Vec3) -> Option<SampleInverse> {
+        match self {
+            Bsdf::Diffuse(b) => b.sample_inverse(wo, wi),
+            Bsdf::Conductor(b) => b.sample_inverse(wo, wi),
+            Bsdf::Dielectric(b) => b.sample_inverse(wo, wi),
+            _ => None,
+        }
     }
 
     /// The BSDF with its GGX lobes roughened by `a` ([`Ggx::roughened`]); diffuse lobes and
@@ -162,5 +188,10 @@ impl SurfaceBsdf {
     #[inline]
     pub fn is_delta(&self) -> bool {
         self.bsdf.is_delta()
+    }
+
+    /// [`Bsdf::sample_inverse`] for world-space directions.
+    pub fn sample_inverse(&self, wo: Vec3, wi: Vec3) -> Option<SampleInverse> {
+        self.bsdf.sample_inverse(self.frame.to_local(wo), self.frame.to_local(wi))
     }
 }

@@ -242,3 +242,40 @@ fn roughening_is_the_identity_at_zero_and_widens_glossy_lobes() {
     assert!(rough.eval(wo, off, m).x > 10.0 * glossy.eval(wo, off, m).x);
     assert!(rough.pdf(wo, off) > 10.0 * glossy.pdf(wo, off));
 }
+
+/// Inverting a sample gives numbers that sample the same direction again: for every invertible
+/// BSDF (rough, near-smooth and smooth; reflection and transmission, from either side), a
+/// direction sampled from `(uc, u)` is sampled again from any `uc` in the inverse's interval and
+/// its `u`.
+#[test]
+fn sample_inverse_resamples_the_direction() {
+    let mut bsdfs: Vec<(&str, Bsdf)> = rough_bsdfs().into_iter().filter(|(_, b)| b.invertible()).collect();
+    bsdfs.push(("dielectric 0.02", Bsdf::Dielectric(Dielectric { distribution: Ggx::isotropic(0.02), eta: 1.5 })));
+    bsdfs.push(("smooth dielectric", Bsdf::Dielectric(Dielectric { distribution: Ggx::isotropic(0.0), eta: 1.5 })));
+    bsdfs.push((
+        "smooth conductor",
+        Bsdf::Conductor(Conductor { distribution: Ggx::isotropic(0.0), eta: Rgb::ONE, k: Rgb::ONE, tint: Rgb::ONE }),
+    ));
+    assert_eq!(bsdfs.len(), 9);
+    let mut rng = Pcg32::new(11, 0);
+    for (name, bsdf) in bsdfs {
+        let mut lobes = [0usize; 2];
+        for wo in outgoing() {
+            for _ in 0..4000 {
+                let (uc, u) = (rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()));
+                let Some(s) = bsdf.sample(wo, uc, u, TransportMode::Radiance) else { continue };
+                let inv = bsdf.sample_inverse(wo, s.wi).unwrap_or_else(|| panic!("{name}: {wo} -> {}", s.wi));
+                let uc2 = inv.uc.map_or(rng.next_f32(), |(lo, hi)| lo + (hi - lo) * rng.next_f32());
+                let u2 = inv.u.unwrap_or(Vec2::new(rng.next_f32(), rng.next_f32()));
+                let again = bsdf.sample(wo, uc2, u2, TransportMode::Radiance).expect("resampled");
+                assert!((again.wi - s.wi).length() < 2e-3, "{name}: {wo}: {} -> {}", s.wi, again.wi);
+                assert_eq!(again.delta, s.delta);
+                lobes[usize::from(s.transmission)] += 1;
+            }
+        }
+        // Dielectrics were inverted through both lobes.
+        if name.starts_with("dielectric") || name.starts_with("smooth dielectric") {
+            assert!(lobes.iter().all(|&n| n > 100), "{name}: {lobes:?}");
+        }
+    }
+}

@@ -70,6 +70,65 @@ pub fn uniform_triangle(u: Vec2) -> Vec3 {
     Vec3::new(b0, b1, 1.0 - b0 - b1)
 }
 
+/// The sample `u` that [`concentric_disk`] maps to the disk point `d` (`|d| ≤ 1`).
+pub fn concentric_disk_inverse(d: Vec2) -> Vec2 {
+    let r = d.length();
+    if r == 0.0 {
+        return Vec2::splat(0.5);
+    }
+    let mut phi = d.y.atan2(d.x);
+    if phi < -FRAC_PI_4 {
+        phi += 2.0 * PI;
+    }
+    // The square's point `o` in `[-1, 1]²`: `r` on the axis whose quadrant holds `phi`, the
+    // other coordinate linear in the angle from that axis.
+    let o = if phi < FRAC_PI_4 {
+        Vec2::new(r, r * phi / FRAC_PI_4)
+    } else if phi < 3.0 * FRAC_PI_4 {
+        Vec2::new(r * (FRAC_PI_2 - phi) / FRAC_PI_4, r)
+    } else if phi < 5.0 * FRAC_PI_4 {
+        Vec2::new(-r, -r * (phi - PI) / FRAC_PI_4)
+    } else {
+        Vec2::new(-r * (3.0 * FRAC_PI_2 - phi) / FRAC_PI_4, -r)
+    };
+    unit_square((o + Vec2::ONE) * 0.5)
+}
+
+/// The sample `u` that [`polar_disk`] maps to the disk point `d`.
+pub fn polar_disk_inverse(d: Vec2) -> Vec2 {
+    let phi = spherical_phi(Vec3::new(d.x, d.y, 0.0));
+    unit_square(Vec2::new(d.length_squared(), phi / (2.0 * PI)))
+}
+
+/// The sample `u` that [`cosine_hemisphere`] maps to the direction `w` (`w.z ≥ 0`).
+pub fn cosine_hemisphere_inverse(w: Vec3) -> Vec2 {
+    concentric_disk_inverse(Vec2::new(w.x, w.y))
+}
+
+/// The sample `u` that [`uniform_sphere`] maps to the unit direction `w`.
+pub fn uniform_sphere_inverse(w: Vec3) -> Vec2 {
+    unit_square(Vec2::new((1.0 - w.z) * 0.5, spherical_phi(w) / (2.0 * PI)))
+}
+
+/// The sample `u` that [`uniform_cone`] maps to the unit direction `w` inside the cone.
+pub fn uniform_cone_inverse(w: Vec3, cos_max: f32) -> Vec2 {
+    let x = if cos_max < 1.0 { (1.0 - w.z) / (1.0 - cos_max) } else { 0.0 };
+    unit_square(Vec2::new(x, spherical_phi(w) / (2.0 * PI)))
+}
+
+/// The sample `u` that [`uniform_triangle`] maps to the barycentrics `b` (its first two;
+/// inverting the two branches of the warp, `b0 < b1` and `b0 ≥ b1`).
+pub fn uniform_triangle_inverse(b: Vec3) -> Vec2 {
+    let u = if b.x < b.y { Vec2::new(2.0 * b.x, b.y + b.x) } else { Vec2::new(b.x + b.y, 2.0 * b.y) };
+    unit_square(u)
+}
+
+/// `u` with each coordinate kept in `[0, 1)`.
+fn unit_square(u: Vec2) -> Vec2 {
+    let below_one = 1.0 - f32::EPSILON / 2.0;
+    Vec2::new(u.x.clamp(0.0, below_one), u.y.clamp(0.0, below_one))
+}
+
 /// Octahedral equal-area map from the unit square to the unit sphere (Clarberg 2008).
 pub fn equal_area_square_to_sphere(p: Vec2) -> Vec3 {
     let u = 2.0 * p.x - 1.0;
@@ -158,6 +217,30 @@ mod tests {
             .count();
         let frac = hits as f64 / f64::from(n);
         assert!((frac - 0.25).abs() < 0.005, "{frac}");
+    }
+
+    #[test]
+    fn inverse_warps_round_trip() {
+        let mut rng = Pcg32::new(4, 0);
+        let close = |a: Vec3, b: Vec3| (a - b).length() < 2e-4;
+        for _ in 0..20_000 {
+            let u = Vec2::new(rng.next_f32(), rng.next_f32());
+            let d = concentric_disk(u);
+            assert!((concentric_disk_inverse(d) - u).length() < 2e-4, "{u} -> {d}");
+            let d = polar_disk(u);
+            let back = polar_disk(polar_disk_inverse(d));
+            assert!((back - d).length() < 2e-4, "{u} -> {d} -> {back}");
+            let w = cosine_hemisphere(u);
+            assert!(close(cosine_hemisphere(cosine_hemisphere_inverse(w)), w));
+            let w = uniform_sphere(u);
+            assert!(close(uniform_sphere(uniform_sphere_inverse(w)), w));
+            let w = uniform_cone(u, 0.8);
+            assert!(close(uniform_cone(uniform_cone_inverse(w, 0.8), 0.8), w));
+            let b = uniform_triangle(u);
+            assert!(close(uniform_triangle(uniform_triangle_inverse(b)), b), "{u} -> {b}");
+            let q = uniform_triangle_inverse(b);
+            assert!(q.min_element() >= 0.0 && q.max_element() < 1.0);
+        }
     }
 
     #[test]
