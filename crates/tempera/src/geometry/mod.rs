@@ -311,6 +311,24 @@ impl Geometry {
         })
     }
 
+    /// The sample `u` with which [`Self::sample_area`] (and [`Self::sample_from`]) produce the
+    /// point `p` of primitive `i`, for a triangle (its barycentrics, inverted through the
+    /// triangle warp); `None` for other shapes.
+    pub fn sample_area_inverse(&self, i: u32, p: Vec3) -> Option<Vec2> {
+        let r = self.prims.get(i as usize)?;
+        let Some(Shape::Mesh(m)) = self.shapes.get(r.shape as usize) else { return None };
+        let [p0, p1, p2] = m.vertices(r.index);
+        let n = (p1 - p0).cross(p2 - p0);
+        let n2 = n.length_squared();
+        if !(n2 > 0.0) {
+            return None;
+        }
+        let b1 = (p - p0).cross(p2 - p0).dot(n) / n2;
+        let b2 = (p1 - p0).cross(p - p0).dot(n) / n2;
+        let b = Vec3::new(1.0 - b1 - b2, b1, b2);
+        Some(crate::math::warp::uniform_triangle_inverse(b.max(Vec3::ZERO)))
+    }
+
     /// Samples a point on primitive `i` as seen from `reference`; the density is per unit solid
     /// angle at `reference`.
     pub fn sample_from(&self, i: u32, reference: Vec3, u: Vec2) -> Option<ShapeSample> {

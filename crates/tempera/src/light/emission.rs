@@ -7,8 +7,8 @@ use crate::geometry::ray::offset_origin;
 use crate::geometry::{Geometry, Ray};
 use crate::math::frame::Frame;
 use crate::math::warp::{
-    UNIFORM_SPHERE_PDF, concentric_disk, cosine_hemisphere, cosine_hemisphere_pdf, uniform_cone, uniform_cone_pdf,
-    uniform_sphere,
+    UNIFORM_SPHERE_PDF, concentric_disk, cosine_hemisphere, cosine_hemisphere_inverse, cosine_hemisphere_pdf,
+    uniform_cone, uniform_cone_inverse, uniform_cone_pdf, uniform_sphere, uniform_sphere_inverse,
 };
 use crate::math::{Rgb, Vec2, Vec3};
 use std::f32::consts::PI;
@@ -41,6 +41,47 @@ fn disk_origin(sphere: SceneSphere, dir: Vec3, u: Vec2) -> Vec3 {
 }
 
 impl Light {
+    /// The numbers with which [`Self::sample_le`] emits from `p` along `dir` (the inverse
+    /// mapping of Bitterli et al. 2017): the position's sample (`None` for a point-like light,
+    /// where any value does) and the direction's. Area lights on triangles, point and spot
+    /// lights; `None` for other lights and shapes, and for directions they do not emit in.
+    pub fn sample_le_inverse(&self, geometry: &Geometry, p: Vec3, dir: Vec3) -> Option<(Option<Vec2>, Vec2)> {
+        match self {
+            Light::Area(l) => {
+                let u_pos = geometry.sample_area_inverse(l.prim, p)?;
+                let ng = geometry.sample_area(l.prim, u_pos)?.point.ng;
+                let cos = ng.dot(dir);
+                let flip = cos < 0.0;
+                if cos == 0.0 || (flip && !l.two_sided) {
+                    return None;
+                }
+                let local = Frame::from_z(if flip { -ng } else { ng }).to_local(dir);
+                let mut u = cosine_hemisphere_inverse(local);
+                if l.two_sided {
+                    u.x = if flip { 0.5 * u.x } else { 0.5 * (u.x + 1.0) }.min(1.0 - f32::EPSILON);
+                }
+                Some((Some(u_pos), u))
+            }
+            Light::Point(_) => Some((None, uniform_sphere_inverse(dir))),
+            Light::Spot(l) => {
+                let local = l.frame.to_local(dir);
+                (local.z >= l.cos_falloff_end).then(|| (None, uniform_cone_inverse(local, l.cos_falloff_end)))
+            }
+            Light::Distant(_) | Light::Infinite(_) => None,
+        }
+    }
+
+    /// The sample with which [`Self::sample_li`] chooses the point `p` of this light: the
+    /// triangle's sample for an area light on a triangle, `Some(None)` for a point or spot
+    /// light (whose one point any value gives), `None` otherwise.
+    pub fn sample_li_inverse(&self, geometry: &Geometry, p: Vec3) -> Option<Option<Vec2>> {
+        match self {
+            Light::Area(l) => geometry.sample_area_inverse(l.prim, p).map(Some),
+            Light::Point(_) | Light::Spot(_) => Some(None),
+            Light::Distant(_) | Light::Infinite(_) => None,
+        }
+    }
+
     /// Samples an emitted ray: `u_pos` chooses the origin, `u_dir` the direction.
     pub fn sample_le(
         &self,

@@ -24,6 +24,11 @@ impl LightSampler {
         Some((i, pmf))
     }
 
+    /// The interval of `u` in which [`Self::sample`] chooses light `light`.
+    pub fn interval(&self, light: usize) -> (f32, f32) {
+        self.distribution.cell_interval(light)
+    }
+
     #[inline]
     pub fn pmf(&self, light: usize) -> f32 {
         if self.count == 0 { 0.0 } else { self.distribution.discrete_pdf(light) }

@@ -327,3 +327,51 @@ fn emission_sampling_is_consistent_and_carries_the_emitted_power() {
         assert!((mean - want).abs() < 4.0 * se + 1e-3 * want, "{name}: power {mean} ± {se}, expected {want}");
     }
 }
+
+/// The inverse mappings give numbers that emit the same ray again (area lights on triangles,
+/// one- and two-sided, point and spot lights), choose the same light and the same point for
+/// next-event estimation; shapes and lights without one give `None`.
+#[test]
+fn inverted_emission_samples_emit_the_same_ray() {
+    let geometry = emitter_geometry();
+    let sphere = SceneSphere { center: Vec3::ZERO, radius: 5.0 };
+    let area = |prim: u32, two_sided: bool| Light::Area(AreaLight { two_sided, ..light_on(prim) });
+    let lights = [
+        area(0, false),
+        area(0, true),
+        Light::Point(PointLight { position: Vec3::ONE, intensity: Rgb::ONE }),
+        Light::Spot(SpotLight::new(Vec3::ZERO, Vec3::new(0.3, 1.0, 0.2), Rgb::ONE, 25.0, 5.0)),
+    ];
+    let mut rng = crate::math::rng::Pcg32::new(13, 1);
+    let mut next = || Vec2::new(rng.next_f32(), rng.next_f32());
+    for (i, light) in lights.iter().enumerate() {
+        let mut flipped = 0;
+        for _ in 0..5000 {
+            let (u_pos, u_dir) = (next(), next());
+            let Some(s) = light.sample_le(&geometry, sphere, u_pos, u_dir) else { continue };
+            let (pos, dir) = light.sample_le_inverse(&geometry, s.ray.o, s.ray.d).expect("invertible");
+            let again = light.sample_le(&geometry, sphere, pos.unwrap_or(next()), dir).expect("emits again");
+            assert!((again.ray.o - s.ray.o).length() < 1e-4, "light {i}: {} vs {}", again.ray.o, s.ray.o);
+            assert!((again.ray.d - s.ray.d).length() < 1e-3, "light {i}: {} vs {}", again.ray.d, s.ray.d);
+            flipped += usize::from(s.n.dot(s.ray.d) < 0.0);
+            if let Light::Area(_) = light {
+                let q = light.sample_li(&geometry, REFERENCE, u_pos).expect("seen");
+                let u = light.sample_li_inverse(&geometry, q.p).expect("triangle").expect("a sample");
+                let back = light.sample_li(&geometry, REFERENCE, u).expect("seen again");
+                assert!((back.p - q.p).length() < 1e-4);
+            }
+        }
+        // The two-sided light was inverted on both sides.
+        assert_eq!(flipped > 500, i == 1, "light {i}: {flipped} emitted below the normal");
+    }
+    assert!(area(1, false).sample_le_inverse(&geometry, Vec3::ZERO, Vec3::Z).is_none());
+    assert!(area(1, false).sample_li_inverse(&geometry, Vec3::ZERO).is_none());
+    let sampler = LightSampler::new(&[1.0, 3.0, 0.0, 2.0]);
+    for light in [0, 1, 3] {
+        let (lo, hi) = sampler.interval(light);
+        assert!(hi > lo);
+        for f in [0.0, 0.3, 0.999] {
+            assert_eq!(sampler.sample(lo + (hi - lo) * f).unwrap().0, light);
+        }
+    }
+}

@@ -69,6 +69,11 @@ impl Distribution1D {
         (i, width as f32, remapped.clamp(0.0, 1.0 - f32::EPSILON))
     }
 
+    /// The interval of `u` in which [`Self::sample_discrete`] chooses cell `i`.
+    pub fn cell_interval(&self, i: usize) -> (f32, f32) {
+        (self.cdf[i] as f32, self.cdf[i + 1] as f32)
+    }
+
     /// Probability of choosing cell `i` in [`Self::sample_discrete`].
     pub fn discrete_pdf(&self, i: usize) -> f32 {
         (self.cdf[i + 1] - self.cdf[i]) as f32
