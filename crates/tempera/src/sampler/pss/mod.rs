@@ -87,6 +87,16 @@ pub struct PssSampler {
     stream_index: usize,
     /// The seed of the counter-based first state, if the sampler has one.
     first_state: Option<u64>,
+    /// Reading the current state's numbers as they are ([`Self::set_replay`]).
+    replay: bool,
+}
+
+fn stream_id(stream: Stream) -> usize {
+    match stream {
+        Stream::Camera => 0,
+        Stream::Light => 1,
+        Stream::Connection => 2,
+    }
 }
 
 /// The first value of entry `index` of the counter-based first state seeded by `seed`.
@@ -109,6 +119,7 @@ impl PssSampler {
             stream: 0,
             stream_index: 0,
             first_state: None,
+            replay: false,
         }
     }
 
@@ -143,6 +154,37 @@ impl PssSampler {
     pub fn start_iteration_as(&mut self, large: bool) {
         self.iteration += 1;
         self.large_step = large;
+    }
+
+    /// Begins a proposal whose entries the caller sets where it chooses ([`Self::pin`]) and
+    /// that draws fresh uniforms for every other entry, as a large step does: the proposal of a
+    /// reversible jump (Bitterli et al. 2017), which keeps the path and changes its technique.
+    pub fn start_jump(&mut self) {
+        self.iteration += 1;
+        self.large_step = true;
+    }
+
+    /// Sets entry `index` of `stream` to `value` in the proposal [`Self::start_jump`] began
+    /// (given back if the proposal is rejected).
+    pub fn pin(&mut self, stream: Stream, index: usize, value: f32) {
+        let index = stream_id(stream) + STREAMS * index;
+        if index >= self.entries.len() {
+            self.entries.resize(index + 1, Entry::NEW);
+        }
+        let e = &mut self.entries[index];
+        if e.modified != self.iteration {
+            e.backup_value = e.value;
+            e.backup_modified = e.modified;
+        }
+        e.value = value;
+        e.modified = self.iteration;
+    }
+
+    /// While `on`, the sampler reads the current state's numbers without mutating them: an
+    /// evaluation then rebuilds the current state's path exactly (the state read entries that
+    /// a previous evaluation of it touched).
+    pub fn set_replay(&mut self, on: bool) {
+        self.replay = on;
     }
 
     /// The probability that a proposal is a large step.
@@ -223,17 +265,16 @@ impl PssSampler {
 
 impl Sampler for PssSampler {
     fn start_stream(&mut self, stream: Stream) {
-        self.stream = match stream {
-            Stream::Camera => 0,
-            Stream::Light => 1,
-            Stream::Connection => 2,
-        };
+        self.stream = stream_id(stream);
         self.stream_index = 0;
     }
 
     fn next_1d(&mut self) -> f32 {
         let index = self.stream + STREAMS * self.stream_index;
         self.stream_index += 1;
+        if self.replay {
+            return self.entries.get(index).map_or(0.5, |e| e.value);
+        }
         self.ensure_ready(index);
         self.entries[index].value
     }

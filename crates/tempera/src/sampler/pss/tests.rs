@@ -166,3 +166,42 @@ fn replay_reproduces_a_chain_exactly() {
     assert_eq!(run(5), run(5));
     assert_ne!(run(5), run(6));
 }
+
+/// A jump proposal keeps the pinned entries, draws every other entry it reads as a fresh
+/// uniform, and is restored exactly on rejection; replay reads the current state unchanged and
+/// moves nothing.
+#[test]
+fn jumps_pin_entries_draw_the_rest_fresh_and_replay_reads_the_state() {
+    let mut s = warm(7);
+    s.start_iteration();
+    let camera = draw(&mut s, Stream::Camera, 4);
+    s.accept();
+    let state = |s: &PssSampler| (s.entries.iter().map(|e| (e.value, e.modified)).collect::<Vec<_>>(), s.iteration);
+    let before = state(&s);
+    s.set_replay(true);
+    assert_eq!(draw(&mut s, Stream::Camera, 4), camera);
+    s.set_replay(false);
+    assert_eq!(state(&s), before, "replay moved nothing");
+    let mut unpinned = Vec::new();
+    for _ in 0..2000 {
+        s.start_jump();
+        s.pin(Stream::Camera, 1, 0.25);
+        s.pin(Stream::Light, 6, 0.75);
+        let c = draw(&mut s, Stream::Camera, 3);
+        let l = draw(&mut s, Stream::Light, 7);
+        assert_eq!((c[1], l[6]), (0.25, 0.75));
+        unpinned.push(c[2]);
+        s.reject();
+        let (entries, iteration) = state(&s);
+        assert_eq!((entries[..before.0.len()].to_vec(), iteration), before, "restored");
+    }
+    // Not a small step of the current state: uniform over [0, 1).
+    assert!(uniform_p_value(&unpinned) > 1e-3);
+    s.start_jump();
+    s.pin(Stream::Camera, 0, 0.5);
+    s.accept();
+    // Entries the accepted jump did not read are fresh at their next use, not the old state's.
+    s.start_iteration_as(false);
+    s.set_sigma(0.0);
+    assert_ne!(draw(&mut s, Stream::Camera, 4)[3], camera[3]);
+}
