@@ -122,7 +122,7 @@ impl Ggx {
     pub fn sample_wm_inverse(&self, w: Vec3, wm: Vec3) -> Option<Vec2> {
         let (wh, t1, t2) = self.visible_frame(w);
         let nh = Vec3::new(wm.x / self.alpha_x, wm.y / self.alpha_y, wm.z).normalize();
-        if !(nh.dot(wh) >= 0.0) {
+        if nh.dot(wh).is_nan() || nh.dot(wh) < 0.0 {
             return None;
         }
         let (px, py) = (nh.dot(t1), nh.dot(t2));

@@ -320,7 +320,7 @@ impl Geometry {
         let [p0, p1, p2] = m.vertices(r.index);
         let n = (p1 - p0).cross(p2 - p0);
         let n2 = n.length_squared();
-        if !(n2 > 0.0) {
+        if n2.is_nan() || n2 <= 0.0 {
             return None;
         }
         let b1 = (p - p0).cross(p2 - p0).dot(n) / n2;

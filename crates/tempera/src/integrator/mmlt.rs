@@ -5,6 +5,7 @@
 //! chains per depth, mutations allotted in proportion to `b_k`.
 
 use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
+use crate::math::rng::Pcg32;
 use crate::mcmc::all_strategies::depth_normaliser;
 use crate::mcmc::importance::ImportanceMap;
 use crate::mcmc::{
@@ -144,6 +145,19 @@ impl Target for DepthTarget<'_> {
 
     fn value_groups(&self, cx: &mut EvalContext, groups: usize, out: &mut Vec<crate::mcmc::GroupValue>) -> u64 {
         evaluate_depths(self.scene, groups, cx, out, self.importance)
+    }
+
+    /// The state's path is rebuilt by replaying its numbers ([`crate::mcmc::jump::propose`]).
+    fn jump(
+        &self,
+        cx: &mut EvalContext,
+        rng: &mut Pcg32,
+        _: &Contribution,
+        proposal: &mut Contribution,
+    ) -> Option<f32> {
+        let (e, jacobian) = crate::mcmc::jump::propose(self.scene, self.depth, cx, rng, self.importance)?;
+        *proposal = e.untempered();
+        Some(jacobian)
     }
 }
 

@@ -26,6 +26,7 @@ fn bootstrap_seed(seed: u64, k: usize, i: usize) -> u64 {
 pub fn sampler_for(seed: u64, k: usize, i: usize, settings: &ChainSettings) -> PssSampler {
     PssSampler::new(bootstrap_seed(seed, k, i), k as u64, settings.sigma, settings.large_step_probability)
         .with_first_state(hash(&[seed, 0xb007, i as u64]))
+        .with_jumps(settings.jumps)
 }
 
 /// Per-thread storage for evaluating independent samples one after the other.

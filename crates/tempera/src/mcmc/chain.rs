@@ -82,6 +82,19 @@ pub trait Target {
     fn value_groups(&self, _cx: &mut EvalContext, _groups: usize, _out: &mut Vec<GroupValue>) -> u64 {
         unreachable!("a target that does not value groups together")
     }
+    /// Proposes a reversible jump of `current` (the state `cx.sampler` holds) to another
+    /// technique of its path ([`super::jump`]), evaluated into `proposal`: returns the jump's
+    /// Jacobian, or `None` where no jump was begun (the sampler unchanged). Targets that are
+    /// not of one path depth propose none.
+    fn jump(
+        &self,
+        _cx: &mut EvalContext,
+        _rng: &mut Pcg32,
+        _current: &Self::State,
+        _proposal: &mut Self::State,
+    ) -> Option<f32> {
+        None
+    }
 }
 
 /// A sample's value under one group's target: what the target's evaluation gives for the
@@ -293,6 +306,10 @@ impl<S: State> Chain<S> {
         mut observe: impl FnMut(&mut S),
         mut splat: impl FnMut(&mut S, f32),
     ) {
+        let jumps = self.cx.sampler.jump_probability();
+        if jumps > 0.0 && self.rng.next_f32() < jumps {
+            return self.jump(target, splat);
+        }
         self.cx.sampler.start_iteration();
         let large = self.cx.sampler.is_large_step();
         self.proposal = target.evaluate(&mut self.cx, std::mem::take(&mut self.proposal));
@@ -334,6 +351,44 @@ impl<S: State> Chain<S> {
             } else {
                 s.small_steps_accepted += 1;
             }
+            std::mem::swap(&mut self.current, &mut self.proposal);
+            self.cx.sampler.accept();
+        } else {
+            self.cx.sampler.reject();
+        }
+    }
+}
+
+impl<S: State> Chain<S> {
+    /// A reversible jump ([`Target::jump`]) in place of a mutation, accepted with
+    /// `min(1, f(y)/f(x) · J)`; where none is begun the current state stays and splats alone.
+    fn jump(&mut self, target: &impl Target<State = S>, mut splat: impl FnMut(&mut S, f32)) {
+        self.stats.mutations += 1;
+        self.stats.jumps_proposed += 1;
+        let h = self.stats.bridge.level;
+        let Some(jacobian) = target.jump(&mut self.cx, &mut self.rng, &self.current, &mut self.proposal) else {
+            if h > 0.0 {
+                self.stats.bridge.states.push(1.0 / (f64::from(self.current.value()) + h));
+            }
+            splat(&mut self.current, 1.0);
+            return;
+        };
+        if self.clamp.is_finite() {
+            self.proposal.clamp_value(self.clamp);
+        }
+        self.stats.invalid += u64::from(self.proposal.invalid());
+        let (pv, cv) = (self.proposal.value(), self.current.value());
+        let a = if cv > 0.0 && jacobian > 0.0 { (pv / cv * jacobian).min(1.0) } else { 0.0 };
+        let a = if a.is_finite() { a } else { 0.0 };
+        if h > 0.0 {
+            let (pv, cv, a) = (f64::from(pv), f64::from(cv), f64::from(a));
+            self.stats.bridge.states.push(a / (pv + h) + (1.0 - a) / (cv + h));
+        }
+        splat(&mut self.proposal, a);
+        splat(&mut self.current, 1.0 - a);
+        if self.rng.next_f32() < a {
+            self.stats.jumps_accepted += 1;
+            self.stats.technique_changes += 1;
             std::mem::swap(&mut self.current, &mut self.proposal);
             self.cx.sampler.accept();
         } else {

@@ -85,6 +85,9 @@ pub struct ChainSettings {
     /// after this share of the budget ([`super::adaptive`]; 0: by `b` throughout). Its walkers
     /// splat in halves for the measurement ([`Group::odd`]).
     pub reallot_at: f64,
+    /// The probability that a chain proposes a reversible jump between the techniques of its
+    /// path instead of a mutation ([`super::jump`]; 0: never).
+    pub jumps: f32,
 }
 
 /// Every group's bootstrap, made before the render ([`ChainSettings::bootstrap_groups`]),

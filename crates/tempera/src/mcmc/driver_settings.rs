@@ -23,6 +23,7 @@ impl ChainSettings {
             measure_efficiency: false,
             bridge_above: None,
             reallot_at: 0.0,
+            jumps: 0.0,
         }
     }
 

@@ -20,6 +20,7 @@ pub mod hybrid;
 mod hybrid_plan;
 pub mod importance;
 pub mod independent;
+pub mod jump;
 pub mod normaliser;
 pub mod stats;
 pub mod strategy;

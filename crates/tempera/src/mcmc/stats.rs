@@ -23,6 +23,10 @@ pub struct DepthStats {
     pub small_steps_accepted: u64,
     /// Accepted proposals that changed the technique `s`.
     pub technique_changes: u64,
+    /// Reversible jumps between techniques proposed and accepted ([`super::jump`]); the
+    /// proposed ones count among `mutations`, not among the steps.
+    pub jumps_proposed: u64,
+    pub jumps_accepted: u64,
     /// Proposals whose value was NaN, infinite or negative (counted as zero).
     pub invalid: u64,
     pub seconds: f64,
@@ -118,6 +122,7 @@ impl DepthStats {
         w.u64(self.bootstrap_samples).u64(self.large_step_samples).f64(self.spread).u64(self.mutations);
         w.u64(self.large_steps_proposed).u64(self.large_steps_accepted);
         w.u64(self.small_steps_proposed).u64(self.small_steps_accepted).u64(self.technique_changes);
+        w.u64(self.jumps_proposed).u64(self.jumps_accepted);
         w.u64(self.invalid).f64(self.seconds).f64(self.prepare_seconds);
         w.u64(self.ladder.len() as u64);
         for &a in &self.ladder {
@@ -172,6 +177,8 @@ impl DepthStats {
             small_steps_proposed: r.u64(),
             small_steps_accepted: r.u64(),
             technique_changes: r.u64(),
+            jumps_proposed: r.u64(),
+            jumps_accepted: r.u64(),
             invalid: r.u64(),
             seconds: r.f64(),
             prepare_seconds: r.f64(),
@@ -221,6 +228,8 @@ impl DepthStats {
         self.small_steps_proposed += o.small_steps_proposed;
         self.small_steps_accepted += o.small_steps_accepted;
         self.technique_changes += o.technique_changes;
+        self.jumps_proposed += o.jumps_proposed;
+        self.jumps_accepted += o.jumps_accepted;
         self.invalid += o.invalid;
         self.seconds += o.seconds;
         self.independent |= o.independent;

@@ -82,7 +82,7 @@ pub(crate) fn raster_position(scene: &Scene, u: Vec2) -> Vec2 {
 
 /// The technique `(s, t)` of depth `k` that camera-stream number `u` chooses, and the number
 /// of the depth's strategies.
-fn technique(k: usize, u: f32) -> (usize, usize, usize) {
+pub(crate) fn technique(k: usize, u: f32) -> (usize, usize, usize) {
     let n = if k == 0 { 1 } else { k + 2 };
     let s = if k == 0 { 0 } else { ((u * n as f32) as usize).min(k + 1) };
     (s, k + 2 - s, n)

@@ -190,6 +190,21 @@ impl Target for TemperedTarget<'_> {
     fn value_groups(&self, cx: &mut EvalContext, groups: usize, out: &mut Vec<crate::mcmc::GroupValue>) -> u64 {
         super::evaluate_depths(self.scene, groups, cx, out, self.importance)
     }
+
+    /// A state keeps its path, so the jump is planned from it without replaying its numbers.
+    fn jump(
+        &self,
+        cx: &mut EvalContext,
+        rng: &mut crate::math::rng::Pcg32,
+        current: &TemperedState,
+        proposal: &mut TemperedState,
+    ) -> Option<f32> {
+        let e = current.evaluated.as_ref()?;
+        let plan = super::jump::plan(self.scene, self.depth, e, &current.paths, rng)?;
+        plan.apply(&mut cx.sampler);
+        *proposal = self.evaluate(cx, std::mem::take(proposal));
+        Some(proposal.evaluated.as_ref().map_or(0.0, |n| plan.jacobian(e, n, &proposal.paths)))
+    }
 }
 
 #[cfg(test)]

@@ -89,6 +89,9 @@ pub struct PssSampler {
     first_state: Option<u64>,
     /// Reading the current state's numbers as they are ([`Self::set_replay`]).
     replay: bool,
+    /// The probability that a chain on this sampler proposes a reversible jump instead of a
+    /// mutation ([`crate::mcmc::jump`]).
+    jump_probability: f32,
 }
 
 fn stream_id(stream: Stream) -> usize {
@@ -120,6 +123,7 @@ impl PssSampler {
             stream_index: 0,
             first_state: None,
             replay: false,
+            jump_probability: 0.0,
         }
     }
 
@@ -178,6 +182,18 @@ impl PssSampler {
         }
         e.value = value;
         e.modified = self.iteration;
+    }
+
+    /// The probability that a chain on this sampler proposes a reversible jump
+    /// ([`crate::mcmc::jump`]) instead of a mutation.
+    pub fn jump_probability(&self) -> f32 {
+        self.jump_probability
+    }
+
+    /// The sampler with jump probability `p`.
+    pub fn with_jumps(mut self, p: f32) -> Self {
+        self.jump_probability = p;
+        self
     }
 
     /// While `on`, the sampler reads the current state's numbers without mutating them: an
