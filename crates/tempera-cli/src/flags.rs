@@ -32,6 +32,11 @@ pub struct IntegratorFlags {
     /// (default 0.01, as pbrt-v4's MLT).
     #[arg(long)]
     pub sigma: Option<f32>,
+    /// MMLT and tempered MMLT: the probability that a chain proposes a reversible jump between
+    /// the bidirectional techniques of its path (the path kept, its sampling inverted) instead
+    /// of a mutation (default 0: never).
+    #[arg(long)]
+    pub jumps: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths: in proportion to their
     /// normalisation b_k (MMLT's default), to b_k times the spread of their light over their
     /// paths, or (tempered MMLT only, its default) by b_k times spread at the depths with
@@ -229,6 +234,7 @@ impl IntegratorFlags {
             chains: self.chains,
             large_step: self.large_step,
             sigma: self.sigma,
+            jumps: self.jumps,
             allocation: self.allocation,
             independent_below: self.independent_below,
             normaliser_share: self.normaliser_share,

@@ -21,6 +21,9 @@ pub struct MmltIntegrator {
     /// Independent chains per depth.
     pub chains: usize,
     pub sigma: f32,
+    /// The probability that a chain proposes a reversible jump between the techniques of its
+    /// path instead of a mutation ([`crate::mcmc::jump`]; 0: never).
+    pub jumps: f32,
     pub large_step_probability: f32,
     /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
     pub spread_allocation: bool,
@@ -80,6 +83,7 @@ impl MmltIntegrator {
             bootstrap: 20_000,
             chains: 64,
             sigma: 0.01,
+            jumps: 0.0,
             large_step_probability: 0.3,
             spread_allocation: false,
             depth_images: false,
@@ -191,6 +195,7 @@ impl Integrator for MmltIntegrator {
         control.check_memory(self.memory_estimate(scene, settings.threads), "a splat buffer per path depth")?;
         let depths = self.max_depth as usize + 1;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
+            .with_jumps(self.jumps)
             .with_spread_allocation(self.spread_allocation)
             .with_group_images(self.depth_images)
             .with_independent_below(self.independent_below)

@@ -208,6 +208,10 @@ pub struct IntegratorSettings {
     /// (pbrt-v4's `sigma`, default 0.01).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sigma: Option<f32>,
+    /// MMLT and tempered MMLT: the probability that a chain proposes a reversible jump between
+    /// the techniques of its path instead of a mutation (0: never).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub jumps: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub allocation: Option<Allocation>,
@@ -390,6 +394,7 @@ impl IntegratorSettings {
             ("chains", self.chains.is_some(), chain),
             ("large_step", self.large_step.is_some(), chain),
             ("sigma", self.sigma.is_some(), chain),
+            ("jumps", self.jumps.is_some(), kind == Mmlt || tempered),
             ("allocation", self.allocation.is_some(), kind == Mmlt || tempered),
             ("independent_below", self.independent_below.is_some(), kind == Mmlt || tempered),
             ("normaliser_share", self.normaliser_share.is_some(), kind == Mmlt || tempered),
@@ -466,6 +471,7 @@ impl IntegratorSettings {
         check_range("independent_below", self.independent_below, 0..=100_000_000)?;
         check_probability("large_step", self.large_step.map(f64::from))?;
         check_probability("hot_large_step", self.hot_large_step.map(f64::from))?;
+        check_probability("jumps", self.jumps.map(f64::from))?;
         if let Some(sigma) = self.sigma.filter(|s| !(*s > 0.0 && *s <= 1.0)) {
             return Err(format!("sigma must lie in (0, 1], not {sigma}"));
         }

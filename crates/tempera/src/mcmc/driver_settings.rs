@@ -34,6 +34,11 @@ impl ChainSettings {
         Self { hybrid: ratio, ..self }
     }
 
+    /// These settings with reversible jumps proposed with probability `p` ([`super::jump`]).
+    pub fn with_jumps(self, p: f32) -> Self {
+        Self { jumps: p, ..self }
+    }
+
     /// These settings with a main-chain mutation counting as `efficiency` independent samples
     /// in the weights of [`Self::with_hybrid`].
     pub fn with_chain_efficiency(self, efficiency: f64) -> Self {

@@ -35,6 +35,9 @@ pub struct TemperedIntegrator {
     /// Ensembles per depth.
     pub chains: usize,
     pub sigma: f32,
+    /// The probability that a chain proposes a reversible jump between the techniques of its
+    /// path instead of a mutation ([`crate::mcmc::jump`]; 0: never).
+    pub jumps: f32,
     pub large_step_probability: f32,
     /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
     pub spread_allocation: bool,
@@ -163,6 +166,7 @@ impl TemperedIntegrator {
             // Half MMLT's 64: measured against 4, 8, 16 and 64 (README, "Fewer chains").
             chains: 32,
             sigma: 0.01,
+            jumps: 0.0,
             large_step_probability: 0.3,
             // By b_k times spread at the depths with ensembles, by b_k (as MMLT) elsewhere:
             // measured against spread everywhere and b_k alone (README, "Allotted as MMLT
@@ -482,6 +486,7 @@ impl TemperedIntegrator {
     /// The chains' driver settings.
     fn chain_settings(&self) -> ChainSettings {
         ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
+            .with_jumps(self.jumps)
             .with_spread_allocation(self.spread_allocation)
             .with_spread_below(if self.spread_only_sparse { self.ensembles_below } else { 0 })
             .with_group_images(self.depth_images)
