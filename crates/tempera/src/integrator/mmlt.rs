@@ -9,7 +9,7 @@ use crate::math::rng::Pcg32;
 use crate::mcmc::all_strategies::depth_normaliser;
 use crate::mcmc::importance::ImportanceMap;
 use crate::mcmc::{
-    ChainSettings, Contribution, EvalContext, NormaliserMoments, Single, Target, evaluate, evaluate_depths,
+    ChainSettings, Contribution, EvalContext, NormaliserMoments, Single, Target, evaluate_connection, evaluate_depths,
 };
 use crate::scene::Scene;
 
@@ -118,8 +118,13 @@ pub(crate) struct DepthTarget<'a> {
 impl Target for DepthTarget<'_> {
     type State = Contribution;
 
+    /// Records the evaluation in `cx` (with its subpaths there), for jumps from the state.
     fn evaluate(&self, cx: &mut EvalContext, _: Contribution) -> Contribution {
-        evaluate(self.scene, self.depth, cx, self.importance)
+        let mut paths = std::mem::take(&mut cx.paths);
+        let e = evaluate_connection(self.scene, self.depth, cx, &mut paths, self.importance);
+        cx.paths = paths;
+        cx.last = Some(e);
+        e.untempered()
     }
 
     /// Depth 0 (emitters seen directly) from points on the emitters connected to the camera,

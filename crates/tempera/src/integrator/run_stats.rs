@@ -87,6 +87,12 @@ pub struct Acceptance {
     pub small_step: f64,
     /// Accepted proposals that changed the technique, per proposal.
     pub technique_change: f64,
+    /// Reversible jumps between techniques (`--jumps`): accepted per jump proposed, and how
+    /// many were proposed.
+    #[serde(default)]
+    pub jump: f64,
+    #[serde(default)]
+    pub jumps_proposed: u64,
 }
 
 /// What the chains of one depth did.
@@ -256,6 +262,8 @@ impl DepthRecord {
                 large_step: rate(d.large_steps_accepted, d.large_steps_proposed),
                 small_step: rate(d.small_steps_accepted, d.small_steps_proposed),
                 technique_change: rate(d.technique_changes, proposed),
+                jump: rate(d.jumps_accepted, d.jumps_proposed),
+                jumps_proposed: d.jumps_proposed,
             },
             invalid: d.invalid,
             seconds: d.seconds,

@@ -57,7 +57,7 @@ impl<S: State> Scratch<S> {
         if let Some(spare) = self.spare.take() {
             sampler.reuse_storage(spare);
         }
-        EvalContext { sampler, paths: std::mem::take(&mut self.paths), rays: 0 }
+        EvalContext { paths: std::mem::take(&mut self.paths), ..EvalContext::new(sampler) }
     }
 
     /// Keeps the storage of a context [`Self::lend`] gave; returns the rays it traced.

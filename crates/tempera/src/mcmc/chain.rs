@@ -4,7 +4,7 @@
 //! that are NaN, infinite or negative count as zero. The chain keeps its state between calls, so
 //! time-budgeted renders can advance all chains in rounds.
 
-use super::{DepthStats, Moments, NormaliserMoments};
+use super::{DepthStats, Evaluated, Moments, NormaliserMoments};
 use crate::bidir::Paths;
 use crate::film::SharedSplats;
 use crate::math::rng::Pcg32;
@@ -31,11 +31,24 @@ pub struct EvalContext {
     pub sampler: PssSampler,
     pub paths: Paths,
     pub rays: u64,
+    /// The last evaluation of a target that leaves its path in [`Self::paths`] (MMLT's depth
+    /// target), where it records it.
+    pub last: Option<Evaluated>,
+    /// The chain's current state's evaluation and subpaths, where [`Self::last`] was recorded
+    /// for it: what a reversible jump ([`super::jump`]) starts from.
+    pub held: Option<Evaluated>,
+    pub held_paths: Paths,
 }
 
 impl EvalContext {
     pub fn new(sampler: PssSampler) -> Self {
-        Self { sampler, paths: Paths::default(), rays: 0 }
+        Self { sampler, paths: Paths::default(), rays: 0, last: None, held: None, held_paths: Paths::default() }
+    }
+
+    /// Keeps the last evaluation (the accepted proposal) as the current state's.
+    fn hold(&mut self) {
+        std::mem::swap(&mut self.paths, &mut self.held_paths);
+        self.held = self.last.take();
     }
 }
 
@@ -157,6 +170,7 @@ impl<S: State> Chain<S> {
             current.clamp_value(clamp);
         }
         cx.sampler.accept();
+        cx.hold();
         Self {
             cx,
             rng,
@@ -231,6 +245,8 @@ impl<S: State> Chain<S> {
         let (p, q) = (self.large_step_probability(), other.large_step_probability());
         std::mem::swap(&mut self.cx.sampler, &mut other.cx.sampler);
         std::mem::swap(&mut self.current, &mut other.current);
+        std::mem::swap(&mut self.cx.held, &mut other.cx.held);
+        std::mem::swap(&mut self.cx.held_paths, &mut other.cx.held_paths);
         self.set_large_step_probability(p);
         other.set_large_step_probability(q);
     }
@@ -353,6 +369,7 @@ impl<S: State> Chain<S> {
             }
             std::mem::swap(&mut self.current, &mut self.proposal);
             self.cx.sampler.accept();
+            self.cx.hold();
         } else {
             self.cx.sampler.reject();
         }
@@ -391,6 +408,7 @@ impl<S: State> Chain<S> {
             self.stats.technique_changes += 1;
             std::mem::swap(&mut self.current, &mut self.proposal);
             self.cx.sampler.accept();
+            self.cx.hold();
         } else {
             self.cx.sampler.reject();
         }

@@ -54,7 +54,7 @@ pub fn evaluate_full(
     out.splats.clear();
     out.f = 0.0;
     out.invalid = false;
-    let EvalContext { sampler, paths, rays } = cx;
+    let EvalContext { sampler, paths, rays, .. } = cx;
     sampler.start_stream(Stream::Camera);
     let film = sampler.next_2d();
     let lens = scene.camera.lens_sample(sampler);

@@ -231,10 +231,11 @@ impl Plan {
     }
 }
 
-/// Proposes a jump of the state `cx.sampler` holds, as a path of depth `k`: the state is
-/// rebuilt by replaying its numbers, and the jump planned from it ([`plan`]). Returns the
-/// proposal's evaluation (its subpaths left in `cx.paths`) and the Jacobian, or `None` where
-/// no jump was begun (the sampler is then unchanged).
+/// Proposes a jump of the state `cx.sampler` holds, as a path of depth `k`, planned
+/// ([`plan`]) from the state's evaluation held in `cx` (`cx.held`, recorded when the state
+/// was accepted). Returns the proposal's evaluation (its subpaths left in `cx.paths`, and
+/// recorded in `cx.last`) and the Jacobian, or `None` where no jump was begun (the sampler is
+/// then unchanged).
 pub fn propose(
     scene: &Scene,
     k: usize,
@@ -242,18 +243,15 @@ pub fn propose(
     rng: &mut Pcg32,
     importance: Option<&super::importance::ImportanceMap>,
 ) -> Option<(Evaluated, f32)> {
+    let current = cx.held?;
+    let plan = plan(scene, k, &current, &cx.held_paths, rng)?;
+    plan.apply(&mut cx.sampler);
     let mut paths = std::mem::take(&mut cx.paths);
-    cx.sampler.set_replay(true);
-    let current = evaluate_connection(scene, k, cx, &mut paths, importance);
-    cx.sampler.set_replay(false);
-    let out = plan(scene, k, &current, &paths, rng).map(|plan| {
-        plan.apply(&mut cx.sampler);
-        let new = evaluate_connection(scene, k, cx, &mut paths, importance);
-        let jacobian = plan.jacobian(&current, &new, &paths);
-        (new, jacobian)
-    });
+    let new = evaluate_connection(scene, k, cx, &mut paths, importance);
+    let jacobian = plan.jacobian(&current, &new, &paths);
     cx.paths = paths;
-    out
+    cx.last = Some(new);
+    Some((new, jacobian))
 }
 
 #[cfg(test)]
@@ -314,25 +312,25 @@ mod tests {
         assert!(accepted > 5000, "{accepted} jumps accepted");
     }
 
-    /// MMLT's depth target, which rebuilds its state's path by replaying the numbers, makes
-    /// the same chain as the tempered target's main replica, which keeps its path: jumps and
-    /// mutations mixed, every value bit for bit.
+    /// MMLT's depth target, whose chains hold their state's path in their context, makes the
+    /// same chain as the tempered target's main replica, whose states keep their paths: jumps
+    /// and mutations mixed, every value bit for bit.
     #[test]
-    fn replayed_and_stored_paths_make_the_same_chain() {
+    fn held_and_stored_paths_make_the_same_chain() {
         let mut scene = crate::scenes::default_scene().build().unwrap();
         scene.set_resolution(32, 32);
         let temper = Tempering { a: 0.0, heuristic: Heuristic::Power, roughen_mis: false };
         let k = 3;
         let stored = TemperedTarget::new(&scene, k, temper, 0.0);
-        let replayed = crate::integrator::mmlt::DepthTarget { scene: &scene, depth: k, importance: None };
+        let held = crate::integrator::mmlt::DepthTarget { scene: &scene, depth: k, importance: None };
         let mut compared = 0;
         for seed in 1..40 {
             let sampler = || PssSampler::new(seed, 0, 0.01, 0.3).with_jumps(0.5);
             let mut a = Chain::start(&stored, sampler(), Pcg32::new(seed, 3), k);
-            let mut b = Chain::start(&replayed, sampler(), Pcg32::new(seed, 3), k);
+            let mut b = Chain::start(&held, sampler(), Pcg32::new(seed, 3), k);
             for _ in 0..300 {
                 a.mutate(&stored, None);
-                b.mutate(&replayed, None);
+                b.mutate(&held, None);
                 assert_eq!(a.state().value().to_bits(), b.state().value().to_bits());
                 assert_eq!(a.state().technique(), b.state().technique());
             }

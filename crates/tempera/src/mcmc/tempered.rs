@@ -191,7 +191,7 @@ impl Target for TemperedTarget<'_> {
         super::evaluate_depths(self.scene, groups, cx, out, self.importance)
     }
 
-    /// A state keeps its path, so the jump is planned from it without replaying its numbers.
+    /// A state keeps its path, so the jump is planned from it.
     fn jump(
         &self,
         cx: &mut EvalContext,

@@ -87,8 +87,6 @@ pub struct PssSampler {
     stream_index: usize,
     /// The seed of the counter-based first state, if the sampler has one.
     first_state: Option<u64>,
-    /// Reading the current state's numbers as they are ([`Self::set_replay`]).
-    replay: bool,
     /// The probability that a chain on this sampler proposes a reversible jump instead of a
     /// mutation ([`crate::mcmc::jump`]).
     jump_probability: f32,
@@ -122,7 +120,6 @@ impl PssSampler {
             stream: 0,
             stream_index: 0,
             first_state: None,
-            replay: false,
             jump_probability: 0.0,
         }
     }
@@ -194,13 +191,6 @@ impl PssSampler {
     pub fn with_jumps(mut self, p: f32) -> Self {
         self.jump_probability = p;
         self
-    }
-
-    /// While `on`, the sampler reads the current state's numbers without mutating them: an
-    /// evaluation then rebuilds the current state's path exactly (the state read entries that
-    /// a previous evaluation of it touched).
-    pub fn set_replay(&mut self, on: bool) {
-        self.replay = on;
     }
 
     /// The probability that a proposal is a large step.
@@ -288,9 +278,6 @@ impl Sampler for PssSampler {
     fn next_1d(&mut self) -> f32 {
         let index = self.stream + STREAMS * self.stream_index;
         self.stream_index += 1;
-        if self.replay {
-            return self.entries.get(index).map_or(0.5, |e| e.value);
-        }
         self.ensure_ready(index);
         self.entries[index].value
     }
