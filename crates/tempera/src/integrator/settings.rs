@@ -460,6 +460,7 @@ impl IntegratorSettings {
                 ("ensembles_below", self.ensembles_below.is_some()),
                 ("swap_target", self.swap_target.is_some()),
                 ("bdpt_above", self.bdpt_above.is_some()),
+                ("jumps", self.jumps.is_some()),
             ];
             if let Some((name, _)) = fixed.iter().find(|f| f.1) {
                 return Err(format!("the paper's setup fixes {name}; give one or the other"));
@@ -471,7 +472,9 @@ impl IntegratorSettings {
         check_range("independent_below", self.independent_below, 0..=100_000_000)?;
         check_probability("large_step", self.large_step.map(f64::from))?;
         check_probability("hot_large_step", self.hot_large_step.map(f64::from))?;
-        check_probability("jumps", self.jumps.map(f64::from))?;
+        if let Some(p) = self.jumps.filter(|p| !(0.0..=1.0).contains(p)) {
+            return Err(format!("jumps must be a probability in [0, 1], not {p}"));
+        }
         if let Some(sigma) = self.sigma.filter(|s| !(*s > 0.0 && *s <= 1.0)) {
             return Err(format!("sigma must lie in (0, 1], not {sigma}"));
         }

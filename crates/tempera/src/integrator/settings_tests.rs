@@ -40,6 +40,14 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
         (IntegratorKind::Mmlt, IntegratorSettings { sigma: Some(0.0), ..Default::default() }, "sigma must lie"),
         (IntegratorKind::Pssmlt, IntegratorSettings { sigma: Some(f32::NAN), ..Default::default() }, "sigma must lie"),
         (IntegratorKind::Bdpt, IntegratorSettings { sigma: Some(0.02), ..Default::default() }, "sigma is not"),
+        (IntegratorKind::Pssmlt, IntegratorSettings { jumps: Some(0.1), ..Default::default() }, "jumps is not"),
+        (IntegratorKind::Mmlt, IntegratorSettings { jumps: Some(1.5), ..Default::default() }, "jumps must be"),
+        (IntegratorKind::Tempered, IntegratorSettings { jumps: Some(f32::NAN), ..Default::default() }, "jumps must be"),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { jumps: Some(0.0), paper: Some(true), ..Default::default() },
+            "fixes jumps",
+        ),
         (
             IntegratorKind::Mmlt,
             IntegratorSettings { importance_pilot: Some(2000), ..Default::default() },

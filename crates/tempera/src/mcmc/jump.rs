@@ -261,19 +261,23 @@ mod tests {
     use crate::mcmc::{Chain, State, TemperedTarget};
 
     /// Jumps alone keep a chain on its path and move it between the path's techniques with the
-    /// stationary probabilities the MMLT target gives a path, its MIS weights `w_s(x)`: on the
-    /// default scene (a triangle light, diffuse walls, rough glass and gold spheres), paths of
-    /// depths 2 to 4. A wrong Jacobian would weigh each technique by `w_s/p_s` instead.
+    /// stationary probabilities its target gives them, `π(u_s)·p_s(x)`: for the MMLT target the
+    /// path's MIS weights `w_s(x)` (which sum to one over the techniques), for a hot replica's
+    /// roughened target its value over the unweighted `f/p_s`. On the default scene (a triangle
+    /// light, diffuse walls, rough glass and gold spheres), paths of depths 2 to 4. A wrong
+    /// Jacobian would weigh each technique by `w_s/p_s` instead.
     #[test]
-    fn jumps_alone_visit_a_paths_techniques_in_proportion_to_their_weights() {
+    fn jumps_alone_visit_a_paths_techniques_in_proportion_to_their_target() {
         let mut scene = crate::scenes::default_scene().build().unwrap();
         scene.set_resolution(32, 32);
-        let temper = Tempering { a: 0.0, heuristic: Heuristic::Power, roughen_mis: false };
         let (mut tested, mut seed, mut accepted) = (0, 0u64, 0);
-        while tested < 6 && seed < 20_000 {
+        while tested < 8 && seed < 20_000 {
             seed += 1;
             let k = 2 + (seed % 3) as usize;
-            let target = TemperedTarget::new(&scene, k, temper, 0.0);
+            // Every other path under a hot replica's target.
+            let a = if tested % 2 == 0 { 0.0 } else { 0.4 };
+            let temper = Tempering { a, heuristic: Heuristic::Power, roughen_mis: false };
+            let target = TemperedTarget::new(&scene, k, temper, a);
             let sampler = PssSampler::new(seed, 0, 0.01, 0.3).with_jumps(1.0);
             let mut chain = Chain::start(&target, sampler, Pcg32::new(seed, 3), k);
             let start = chain.state();
@@ -284,7 +288,7 @@ mod tests {
             }
             let mut positions: Vec<Vec3> = path.iter().map(|v| v.p).collect();
             let steps = 20_000;
-            let (mut visits, mut weights) = (vec![0u64; k + 2], vec![f32::NAN; k + 2]);
+            let (mut visits, mut weights, mut odds) = (vec![0u64; k + 2], vec![f32::NAN; k + 2], vec![0.0; k + 2]);
             for _ in 0..steps {
                 chain.mutate(&target, None);
                 let state = chain.state();
@@ -296,19 +300,26 @@ mod tests {
                 assert!(moved[0] < 2e-4 && moved[1..].iter().all(|&d| d < 1e-4), "the path moved: {moved:?}");
                 positions = now;
                 visits[e.s] += 1;
-                weights[e.s] = e.connection.as_ref().expect("connected").weight;
+                let c = e.connection.as_ref().expect("connected");
+                weights[e.s] = c.weight;
+                odds[e.s] = state.value() / luminance(c.l);
             }
             accepted += chain.stats.jumps_accepted;
-            let visited: f32 = weights.iter().filter(|w| !w.is_nan()).sum();
-            assert!((visited - 1.0).abs() < 1e-3, "seed {seed}: visited weights sum to {visited}: {weights:?}");
-            for (s, (&n, &w)) in visits.iter().zip(&weights).enumerate() {
+            let expected: Vec<f32> = if a == 0.0 {
+                let visited: f32 = weights.iter().filter(|w| !w.is_nan()).sum();
+                assert!((visited - 1.0).abs() < 1e-3, "seed {seed}: visited weights sum to {visited}: {weights:?}");
+                weights.iter().map(|w| if w.is_nan() { 0.0 } else { *w }).collect()
+            } else {
+                let sum: f32 = odds.iter().sum();
+                odds.iter().map(|o| o / sum).collect()
+            };
+            for (s, (&n, &p)) in visits.iter().zip(&expected).enumerate() {
                 let share = n as f32 / steps as f32;
-                let w = if w.is_nan() { 0.0 } else { w };
-                assert!((share - w).abs() < 0.03, "seed {seed}, depth {k}, s = {s}: {share} of the time, weight {w}");
+                assert!((share - p).abs() < 0.03, "seed {seed}, depth {k}, a = {a}, s = {s}: {share} of the time, {p}");
             }
             tested += 1;
         }
-        assert_eq!(tested, 6);
+        assert_eq!(tested, 8);
         assert!(accepted > 5000, "{accepted} jumps accepted");
     }
 
