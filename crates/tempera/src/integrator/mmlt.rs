@@ -118,12 +118,15 @@ pub(crate) struct DepthTarget<'a> {
 impl Target for DepthTarget<'_> {
     type State = Contribution;
 
-    /// Records the evaluation in `cx` (with its subpaths there), for jumps from the state.
+    /// Records the evaluation in `cx` (with its subpaths there) for chains that jump.
     fn evaluate(&self, cx: &mut EvalContext, _: Contribution) -> Contribution {
         let mut paths = std::mem::take(&mut cx.paths);
         let e = evaluate_connection(self.scene, self.depth, cx, &mut paths, self.importance);
         cx.paths = paths;
-        cx.last = Some(e);
+        // Recorded only for chains that jump: a copy per mutation otherwise spent for nothing.
+        if cx.sampler.jump_probability() > 0.0 {
+            cx.last = Some(e);
+        }
         e.untempered()
     }
 

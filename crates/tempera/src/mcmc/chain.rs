@@ -47,8 +47,10 @@ impl EvalContext {
 
     /// Keeps the last evaluation (the accepted proposal) as the current state's.
     fn hold(&mut self) {
-        std::mem::swap(&mut self.paths, &mut self.held_paths);
         self.held = self.last.take();
+        if self.held.is_some() {
+            std::mem::swap(&mut self.paths, &mut self.held_paths);
+        }
     }
 }
 
@@ -346,33 +348,42 @@ impl<S: State> Chain<S> {
         let (pv, cv) = (self.proposal.value(), self.current.value());
         let a = if cv > 0.0 { (pv / cv).min(1.0) } else { 1.0 };
         let h = s.bridge.level;
-        if h > 0.0 {
-            let (pv, cv, a) = (f64::from(pv), f64::from(cv), f64::from(a));
-            s.bridge.states.push(a / (pv + h) + (1.0 - a) / (cv + h));
-            if large {
-                s.bridge.uniform.push(pv / (pv + h));
-            }
+        if h > 0.0 && large {
+            s.bridge.uniform.push(f64::from(pv) / (f64::from(pv) + h));
         }
-        splat(&mut self.proposal, a);
-        splat(&mut self.current, 1.0 - a);
-        let (proposal, current) = (&self.proposal, &self.current);
-        let s = &mut self.stats;
         s.mutations += 1;
-        if self.rng.next_f32() < a {
-            if proposal.technique() != current.technique() {
-                s.technique_changes += 1;
-            }
+        let changed = self.proposal.technique() != self.current.technique();
+        if self.settle(a, &mut splat) {
+            let s = &mut self.stats;
+            s.technique_changes += u64::from(changed);
             if large {
                 s.large_steps_accepted += 1;
             } else {
                 s.small_steps_accepted += 1;
             }
+        }
+    }
+
+    /// Settles the evaluated proposal, accepted with probability `a`: adds the step to the
+    /// bridge sums, splats proposal and current state with their expected weights, and accepts
+    /// (keeping the proposal's held evaluation) or rejects. Returns whether it accepted.
+    fn settle(&mut self, a: f32, splat: &mut impl FnMut(&mut S, f32)) -> bool {
+        let h = self.stats.bridge.level;
+        if h > 0.0 {
+            let (pv, cv, a) = (f64::from(self.proposal.value()), f64::from(self.current.value()), f64::from(a));
+            self.stats.bridge.states.push(a / (pv + h) + (1.0 - a) / (cv + h));
+        }
+        splat(&mut self.proposal, a);
+        splat(&mut self.current, 1.0 - a);
+        let accepted = self.rng.next_f32() < a;
+        if accepted {
             std::mem::swap(&mut self.current, &mut self.proposal);
             self.cx.sampler.accept();
             self.cx.hold();
         } else {
             self.cx.sampler.reject();
         }
+        accepted
     }
 }
 
@@ -396,21 +407,9 @@ impl<S: State> Chain<S> {
         self.stats.invalid += u64::from(self.proposal.invalid());
         let (pv, cv) = (self.proposal.value(), self.current.value());
         let a = if cv > 0.0 && jacobian > 0.0 { (pv / cv * jacobian).min(1.0) } else { 0.0 };
-        let a = if a.is_finite() { a } else { 0.0 };
-        if h > 0.0 {
-            let (pv, cv, a) = (f64::from(pv), f64::from(cv), f64::from(a));
-            self.stats.bridge.states.push(a / (pv + h) + (1.0 - a) / (cv + h));
-        }
-        splat(&mut self.proposal, a);
-        splat(&mut self.current, 1.0 - a);
-        if self.rng.next_f32() < a {
+        if self.settle(if a.is_finite() { a } else { 0.0 }, &mut splat) {
             self.stats.jumps_accepted += 1;
             self.stats.technique_changes += 1;
-            std::mem::swap(&mut self.current, &mut self.proposal);
-            self.cx.sampler.accept();
-            self.cx.hold();
-        } else {
-            self.cx.sampler.reject();
         }
     }
 }
