@@ -34,9 +34,14 @@ pub struct IntegratorFlags {
     pub sigma: Option<f32>,
     /// MMLT and tempered MMLT: the probability that a chain proposes a reversible jump between
     /// the bidirectional techniques of its path (the path kept, its sampling inverted) instead
-    /// of a mutation (default 0: never).
+    /// of a mutation (MMLT's default 0: never; tempered MMLT's 0.05).
     #[arg(long)]
     pub jumps: Option<f32>,
+    /// MMLT and tempered MMLT: the probability that a small step is a film step, which moves
+    /// the film position alone by 2 % of the film and keeps every other number of the state
+    /// (MMLT's default 0: never; tempered MMLT's 0.3).
+    #[arg(long)]
+    pub film_steps: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths: in proportion to their
     /// normalisation b_k (MMLT's default), to b_k times the spread of their light over their
     /// paths, or (tempered MMLT only, its default) by b_k times spread at the depths with
@@ -235,6 +240,7 @@ impl IntegratorFlags {
             large_step: self.large_step,
             sigma: self.sigma,
             jumps: self.jumps,
+            film_steps: self.film_steps,
             allocation: self.allocation,
             independent_below: self.independent_below,
             normaliser_share: self.normaliser_share,

@@ -410,3 +410,22 @@ fn mmlt_with_jumps_agrees_with_bdpt() {
         }
     }
 }
+
+/// MMLT whose small steps are often film steps, which move the film position alone, renders
+/// what BDPT renders, on the Cornell box and the default scene, with many film steps accepted
+/// at every depth `k ≥ 1`.
+#[test]
+fn mmlt_with_film_steps_agrees_with_bdpt() {
+    let mut default = crate::scenes::default_scene().build().unwrap();
+    default.set_resolution(32, 32);
+    let cornell = crate::scenes::cornell_box(32, 32).build().unwrap();
+    for (name, scene) in [("cornell box", cornell), ("default scene", default)] {
+        let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
+        let m = MmltIntegrator { bootstrap: 200_000, film_steps: 0.5, ..MmltIntegrator::new(5) };
+        let film = render_with(&scene, &m, Budget::Samples(2048), 2, 0);
+        assert_agree(name, &film.image, &bdpt.image, 8, 0.01);
+        for d in film.chains.iter().filter(|d| d.depth >= 1) {
+            assert!(d.film_steps_accepted > 500, "{name}: {d:?}");
+        }
+    }
+}

@@ -24,6 +24,9 @@ pub struct MmltIntegrator {
     /// The probability that a chain proposes a reversible jump between the techniques of its
     /// path instead of a mutation ([`crate::mcmc::jump`]; 0: never).
     pub jumps: f32,
+    /// The probability that a small step is a film step, which moves the film position alone
+    /// ([`crate::sampler::PssSampler::with_film_steps`]; 0: never).
+    pub film_steps: f32,
     pub large_step_probability: f32,
     /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
     pub spread_allocation: bool,
@@ -84,6 +87,7 @@ impl MmltIntegrator {
             chains: 64,
             sigma: 0.01,
             jumps: 0.0,
+            film_steps: 0.0,
             large_step_probability: 0.3,
             spread_allocation: false,
             depth_images: false,
@@ -204,6 +208,7 @@ impl Integrator for MmltIntegrator {
         let depths = self.max_depth as usize + 1;
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_jumps(self.jumps)
+            .with_film_steps(self.film_steps)
             .with_spread_allocation(self.spread_allocation)
             .with_group_images(self.depth_images)
             .with_independent_below(self.independent_below)

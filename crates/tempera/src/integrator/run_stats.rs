@@ -93,6 +93,12 @@ pub struct Acceptance {
     pub jump: f64,
     #[serde(default)]
     pub jumps_proposed: u64,
+    /// Film steps (`--film-steps`): accepted per film step proposed, and how many were
+    /// proposed (among the small steps).
+    #[serde(default)]
+    pub film_step: f64,
+    #[serde(default)]
+    pub film_steps_proposed: u64,
 }
 
 /// What the chains of one depth did.
@@ -264,6 +270,8 @@ impl DepthRecord {
                 technique_change: rate(d.technique_changes, proposed),
                 jump: rate(d.jumps_accepted, d.jumps_proposed),
                 jumps_proposed: d.jumps_proposed,
+                film_step: rate(d.film_steps_accepted, d.film_steps_proposed),
+                film_steps_proposed: d.film_steps_proposed,
             },
             invalid: d.invalid,
             seconds: d.seconds,

@@ -212,6 +212,9 @@ pub struct IntegratorSettings {
     /// the techniques of its path instead of a mutation (0: never).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub jumps: Option<f32>,
+    /// MMLT and tempered MMLT: the probability that a small step moves the film position alone.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub film_steps: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub allocation: Option<Allocation>,
@@ -395,6 +398,7 @@ impl IntegratorSettings {
             ("large_step", self.large_step.is_some(), chain),
             ("sigma", self.sigma.is_some(), chain),
             ("jumps", self.jumps.is_some(), kind == Mmlt || tempered),
+            ("film_steps", self.film_steps.is_some(), kind == Mmlt || tempered),
             ("allocation", self.allocation.is_some(), kind == Mmlt || tempered),
             ("independent_below", self.independent_below.is_some(), kind == Mmlt || tempered),
             ("normaliser_share", self.normaliser_share.is_some(), kind == Mmlt || tempered),
@@ -461,6 +465,7 @@ impl IntegratorSettings {
                 ("swap_target", self.swap_target.is_some()),
                 ("bdpt_above", self.bdpt_above.is_some()),
                 ("jumps", self.jumps.is_some()),
+                ("film_steps", self.film_steps.is_some()),
             ];
             if let Some((name, _)) = fixed.iter().find(|f| f.1) {
                 return Err(format!("the paper's setup fixes {name}; give one or the other"));
@@ -472,8 +477,10 @@ impl IntegratorSettings {
         check_range("independent_below", self.independent_below, 0..=100_000_000)?;
         check_probability("large_step", self.large_step.map(f64::from))?;
         check_probability("hot_large_step", self.hot_large_step.map(f64::from))?;
-        if let Some(p) = self.jumps.filter(|p| !(0.0..=1.0).contains(p)) {
-            return Err(format!("jumps must be a probability in [0, 1], not {p}"));
+        for (name, p) in [("jumps", self.jumps), ("film_steps", self.film_steps)] {
+            if let Some(p) = p.filter(|p| !(0.0..=1.0).contains(p)) {
+                return Err(format!("{name} must be a probability in [0, 1], not {p}"));
+            }
         }
         if let Some(sigma) = self.sigma.filter(|s| !(*s > 0.0 && *s <= 1.0)) {
             return Err(format!("sigma must lie in (0, 1], not {sigma}"));

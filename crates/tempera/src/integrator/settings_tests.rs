@@ -44,6 +44,21 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
         (IntegratorKind::Mmlt, IntegratorSettings { jumps: Some(1.5), ..Default::default() }, "jumps must be"),
         (IntegratorKind::Tempered, IntegratorSettings { jumps: Some(f32::NAN), ..Default::default() }, "jumps must be"),
         (
+            IntegratorKind::Pssmlt,
+            IntegratorSettings { film_steps: Some(0.1), ..Default::default() },
+            "film_steps is not",
+        ),
+        (
+            IntegratorKind::Mmlt,
+            IntegratorSettings { film_steps: Some(-0.5), ..Default::default() },
+            "film_steps must be",
+        ),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { film_steps: Some(0.3), paper: Some(true), ..Default::default() },
+            "fixes film_steps",
+        ),
+        (
             IntegratorKind::Tempered,
             IntegratorSettings { jumps: Some(0.0), paper: Some(true), ..Default::default() },
             "fixes jumps",

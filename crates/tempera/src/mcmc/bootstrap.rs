@@ -11,6 +11,7 @@ use crate::bidir::Paths;
 use crate::math::distribution::Distribution1D;
 use crate::math::rng::hash;
 use crate::sampler::PssSampler;
+use crate::sampler::pss::FILM_STEP_WIDTH;
 use rayon::prelude::*;
 
 /// Seed of the numbers of the chain that starts from bootstrap sample `i` of group `k`.
@@ -27,6 +28,7 @@ pub fn sampler_for(seed: u64, k: usize, i: usize, settings: &ChainSettings) -> P
     PssSampler::new(bootstrap_seed(seed, k, i), k as u64, settings.sigma, settings.large_step_probability)
         .with_first_state(hash(&[seed, 0xb007, i as u64]))
         .with_jumps(settings.jumps)
+        .with_film_steps(settings.film_steps, FILM_STEP_WIDTH)
 }
 
 /// Per-thread storage for evaluating independent samples one after the other.

@@ -330,6 +330,7 @@ impl<S: State> Chain<S> {
         }
         self.cx.sampler.start_iteration();
         let large = self.cx.sampler.is_large_step();
+        let film = self.cx.sampler.is_film_step();
         self.proposal = target.evaluate(&mut self.cx, std::mem::take(&mut self.proposal));
         if self.clamp.is_finite() {
             self.proposal.clamp_value(self.clamp);
@@ -344,6 +345,7 @@ impl<S: State> Chain<S> {
             s.large_steps_proposed += 1;
         } else {
             s.small_steps_proposed += 1;
+            s.film_steps_proposed += u64::from(film);
         }
         let (pv, cv) = (self.proposal.value(), self.current.value());
         let a = if cv > 0.0 { (pv / cv).min(1.0) } else { 1.0 };
@@ -360,6 +362,7 @@ impl<S: State> Chain<S> {
                 s.large_steps_accepted += 1;
             } else {
                 s.small_steps_accepted += 1;
+                s.film_steps_accepted += u64::from(film);
             }
         }
     }

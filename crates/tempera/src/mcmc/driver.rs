@@ -88,6 +88,9 @@ pub struct ChainSettings {
     /// The probability that a chain proposes a reversible jump between the techniques of its
     /// path instead of a mutation ([`super::jump`]; 0: never).
     pub jumps: f32,
+    /// The probability that a small step is a film step, which moves the state's film position
+    /// alone ([`crate::sampler::PssSampler::with_film_steps`]; 0: never).
+    pub film_steps: f32,
 }
 
 /// Every group's bootstrap, made before the render ([`ChainSettings::bootstrap_groups`]),

@@ -24,6 +24,7 @@ impl ChainSettings {
             bridge_above: None,
             reallot_at: 0.0,
             jumps: 0.0,
+            film_steps: 0.0,
         }
     }
 
@@ -37,6 +38,12 @@ impl ChainSettings {
     /// These settings with reversible jumps proposed with probability `p` ([`super::jump`]).
     pub fn with_jumps(self, p: f32) -> Self {
         Self { jumps: p, ..self }
+    }
+
+    /// These settings with film steps in place of small steps with probability `p`
+    /// ([`Self::film_steps`]).
+    pub fn with_film_steps(self, p: f32) -> Self {
+        Self { film_steps: p, ..self }
     }
 
     /// These settings with a main-chain mutation counting as `efficiency` independent samples

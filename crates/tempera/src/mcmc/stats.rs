@@ -27,6 +27,10 @@ pub struct DepthStats {
     /// proposed ones count among `mutations`, not among the steps.
     pub jumps_proposed: u64,
     pub jumps_accepted: u64,
+    /// Film steps proposed and accepted ([`crate::sampler::PssSampler::with_film_steps`]);
+    /// they count among the small steps too.
+    pub film_steps_proposed: u64,
+    pub film_steps_accepted: u64,
     /// Proposals whose value was NaN, infinite or negative (counted as zero).
     pub invalid: u64,
     pub seconds: f64,
@@ -123,6 +127,7 @@ impl DepthStats {
         w.u64(self.large_steps_proposed).u64(self.large_steps_accepted);
         w.u64(self.small_steps_proposed).u64(self.small_steps_accepted).u64(self.technique_changes);
         w.u64(self.jumps_proposed).u64(self.jumps_accepted);
+        w.u64(self.film_steps_proposed).u64(self.film_steps_accepted);
         w.u64(self.invalid).f64(self.seconds).f64(self.prepare_seconds);
         w.u64(self.ladder.len() as u64);
         for &a in &self.ladder {
@@ -179,6 +184,8 @@ impl DepthStats {
             technique_changes: r.u64(),
             jumps_proposed: r.u64(),
             jumps_accepted: r.u64(),
+            film_steps_proposed: r.u64(),
+            film_steps_accepted: r.u64(),
             invalid: r.u64(),
             seconds: r.f64(),
             prepare_seconds: r.f64(),
@@ -230,6 +237,8 @@ impl DepthStats {
         self.technique_changes += o.technique_changes;
         self.jumps_proposed += o.jumps_proposed;
         self.jumps_accepted += o.jumps_accepted;
+        self.film_steps_proposed += o.film_steps_proposed;
+        self.film_steps_accepted += o.film_steps_accepted;
         self.invalid += o.invalid;
         self.seconds += o.seconds;
         self.independent |= o.independent;

@@ -38,6 +38,8 @@ pub struct TemperedIntegrator {
     /// The probability that a chain proposes a reversible jump between the techniques of its
     /// path instead of a mutation ([`crate::mcmc::jump`]; 0: never).
     pub jumps: f32,
+    /// The probability that a small step is a film step ([`crate::sampler::PssSampler::with_film_steps`]).
+    pub film_steps: f32,
     pub large_step_probability: f32,
     /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
     pub spread_allocation: bool,
@@ -164,6 +166,10 @@ pub const DEFAULT_BDPT_ABOVE: f64 = 0.03;
 /// veach-ajar (README, "Jumps between the techniques of a path").
 pub const DEFAULT_JUMPS: f32 = 0.05;
 
+/// [`TemperedIntegrator::film_steps`]' default: the probability that a small step is a film
+/// step (README, "Film steps").
+pub const DEFAULT_FILM_STEPS: f32 = 0.3;
+
 impl TemperedIntegrator {
     pub fn new(max_depth: u32) -> Self {
         Self {
@@ -173,6 +179,7 @@ impl TemperedIntegrator {
             chains: 32,
             sigma: 0.01,
             jumps: DEFAULT_JUMPS,
+            film_steps: DEFAULT_FILM_STEPS,
             large_step_probability: 0.3,
             // By b_k times spread at the depths with ensembles, by b_k (as MMLT) elsewhere:
             // measured against spread everywhere and b_k alone (README, "Allotted as MMLT
@@ -254,6 +261,7 @@ impl TemperedIntegrator {
             importance_pilot: 0,
             chains: 64,
             jumps: 0.0,
+            film_steps: 0.0,
             ..Self::new(max_depth)
         }
     }
@@ -494,6 +502,7 @@ impl TemperedIntegrator {
     fn chain_settings(&self) -> ChainSettings {
         ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_jumps(self.jumps)
+            .with_film_steps(self.film_steps)
             .with_spread_allocation(self.spread_allocation)
             .with_spread_below(if self.spread_only_sparse { self.ensembles_below } else { 0 })
             .with_group_images(self.depth_images)

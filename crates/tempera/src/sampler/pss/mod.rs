@@ -90,7 +90,22 @@ pub struct PssSampler {
     /// The probability that a chain on this sampler proposes a reversible jump instead of a
     /// mutation ([`crate::mcmc::jump`]).
     jump_probability: f32,
+    /// The probability that a small step is a film step ([`Self::with_film_steps`]).
+    film_step_probability: f32,
+    /// The width of a film step.
+    film_sigma: f32,
+    /// Whether the current proposal is a film step.
+    film_step: bool,
 }
+
+/// The indices of the entries that choose the film position in MMLT's states
+/// ([`crate::mcmc::strategy::evaluate_connection`]): the camera stream's second and third.
+const FILM: [usize; 2] = [STREAMS, 2 * STREAMS];
+
+/// The width of a film step ([`PssSampler::with_film_steps`]) in primary sample space: 2 % of
+/// the film's width and height, twice the small step's (measured against 5 %, whose larger
+/// moves left more renders blotched; README, "Film steps").
+pub const FILM_STEP_WIDTH: f32 = 0.02;
 
 fn stream_id(stream: Stream) -> usize {
     match stream {
@@ -121,6 +136,9 @@ impl PssSampler {
             stream_index: 0,
             first_state: None,
             jump_probability: 0.0,
+            film_step_probability: 0.0,
+            film_sigma: 0.0,
+            film_step: false,
         }
     }
 
@@ -148,6 +166,24 @@ impl PssSampler {
     pub fn start_iteration(&mut self) {
         self.iteration += 1;
         self.large_step = self.rng.next_f32() < self.large_step_probability;
+        self.film_step =
+            !self.large_step && self.film_step_probability > 0.0 && self.rng.next_f32() < self.film_step_probability;
+    }
+
+    /// The sampler with film steps: with probability `p` a small step moves the film position
+    /// alone, by a wrapped Gaussian of width `sigma`, and keeps every other number. A primary
+    /// sample space counterpart of Veach & Guibas' lens perturbation ("Metropolis Light
+    /// Transport", 1997): every other number keeps its value, so each vertex the path meets
+    /// next scatters by the same local direction and the light subpath stays as it is, where
+    /// a small step moves every number of the path at once and breaks a path that reaches the
+    /// light through a gap more often than it moves its pixel. Perturbing a subset of the
+    /// numbers by a symmetric kernel is itself symmetric, so a film step is accepted with
+    /// `min(1, f(y)/f(x))` as a small step is. The states must lay the film position out as
+    /// MMLT's do (the camera stream's second and third numbers).
+    pub fn with_film_steps(mut self, p: f32, sigma: f32) -> Self {
+        self.film_step_probability = p;
+        self.film_sigma = sigma;
+        self
     }
 
     /// Begins a proposal of the kind asked for: a large step (independent uniforms) or a
@@ -155,6 +191,7 @@ impl PssSampler {
     pub fn start_iteration_as(&mut self, large: bool) {
         self.iteration += 1;
         self.large_step = large;
+        self.film_step = false;
     }
 
     /// Begins a proposal whose entries the caller sets where it chooses ([`Self::pin`]) and
@@ -163,6 +200,7 @@ impl PssSampler {
     pub fn start_jump(&mut self) {
         self.iteration += 1;
         self.large_step = true;
+        self.film_step = false;
     }
 
     /// Sets entry `index` of `stream` to `value` in the proposal [`Self::start_jump`] began
@@ -213,6 +251,11 @@ impl PssSampler {
         self.large_step
     }
 
+    /// Whether the current proposal is a film step ([`Self::with_film_steps`]).
+    pub fn is_film_step(&self) -> bool {
+        self.film_step
+    }
+
     /// Keeps the proposal as the chain's new state.
     pub fn accept(&mut self) {
         if self.large_step {
@@ -253,8 +296,17 @@ impl PssSampler {
                 e.modified = last_large;
             }
             let skipped = (iteration - e.modified) as f32;
+            // A film step moves the film position by its own width and every other entry by
+            // none; the iterations skipped before it by the small steps' width.
+            let width = match (self.film_step, FILM.contains(&index)) {
+                (false, _) => self.sigma * skipped.sqrt(),
+                (true, film) => {
+                    let own = if film { self.film_sigma } else { 0.0 };
+                    (self.sigma * self.sigma * (skipped - 1.0) + own * own).sqrt()
+                }
+            };
             let normal = SQRT_2 * erf_inv(2.0 * self.rng.next_f32() - 1.0);
-            e.value += normal * self.sigma * skipped.sqrt();
+            e.value += normal * width;
             e.value -= e.value.floor();
             if e.value >= 1.0 {
                 e.value = 0.0;

@@ -200,3 +200,50 @@ fn jumps_pin_entries_draw_the_rest_fresh_and_are_restored_on_rejection() {
     s.set_sigma(0.0);
     assert_ne!(draw(&mut s, Stream::Camera, 4)[3], camera[3]);
 }
+
+/// A film step moves the film position (the camera stream's second and third entries) by a
+/// wrapped Gaussian of its own width, and keeps every other entry; entries skipped before it
+/// catch up by the small steps' width alone.
+#[test]
+fn film_steps_move_the_film_position_alone() {
+    let (sigma, width) = (0.01, 0.05);
+    let mut s = PssSampler::new(9, 1, sigma, 0.0).with_film_steps(1.0, width);
+    s.start_iteration_as(true);
+    let camera = draw(&mut s, Stream::Camera, 5);
+    let light = draw(&mut s, Stream::Light, 3);
+    s.accept();
+    let mut offsets = Vec::new();
+    for _ in 0..4000 {
+        s.start_iteration();
+        assert!(s.is_film_step() && !s.is_large_step());
+        let c = draw(&mut s, Stream::Camera, 5);
+        assert_eq!((c[0], &c[3..], draw(&mut s, Stream::Light, 3)), (camera[0], &camera[3..], light.clone()));
+        for i in [1, 2] {
+            let d = c[i] - camera[i];
+            offsets.push(f64::from(d - d.round()));
+        }
+        s.reject();
+    }
+    let var = offsets.iter().map(|d| d * d).sum::<f64>() / offsets.len() as f64;
+    assert!((var.sqrt() / f64::from(width) - 1.0).abs() < 0.05, "film step width {}", var.sqrt());
+    // A light entry skipped for three iterations, then read in a film step, moves by the
+    // small steps' width over the two iterations before it: σ·√2.
+    let mut moves = Vec::new();
+    for seed in 0..4000 {
+        let mut s = PssSampler::new(seed, 2, sigma, 0.0).with_film_steps(0.0, width);
+        s.start_iteration_as(true);
+        let x0 = draw(&mut s, Stream::Light, 1)[0];
+        s.accept();
+        for _ in 0..2 {
+            s.start_iteration();
+            draw(&mut s, Stream::Camera, 1);
+            s.accept();
+        }
+        s.film_step_probability = 1.0;
+        s.start_iteration();
+        let d = draw(&mut s, Stream::Light, 1)[0] - x0;
+        moves.push(f64::from(d - d.round()));
+    }
+    let sd = (moves.iter().map(|d| d * d).sum::<f64>() / moves.len() as f64).sqrt();
+    assert!((sd / (f64::from(sigma) * 2f64.sqrt()) - 1.0).abs() < 0.05, "catch-up width {sd}");
+}
