@@ -23,6 +23,11 @@ pub trait State: Default {
     /// Clamps the target value at `c` (the contributions stay): only states of targets that
     /// are [`Target::clampable`] are ever clamped, so the others keep their value.
     fn clamp_value(&mut self, _c: f32) {}
+    /// Whether the value does not depend on the state's film numbers, so that a film step
+    /// ([`PssSampler::with_film_steps`]) would propose the state itself.
+    fn film_unread(&self) -> bool {
+        false
+    }
 }
 
 /// What evaluating a primary-sample-space state needs: the sampler holding the state, subpath
@@ -331,6 +336,11 @@ impl<S: State> Chain<S> {
         self.cx.sampler.start_iteration();
         let large = self.cx.sampler.is_large_step();
         let film = self.cx.sampler.is_film_step();
+        if film && self.current.film_unread() {
+            // The proposal is the state itself, accepted: no evaluation needed.
+            self.cx.sampler.reject();
+            return self.stay(true, &mut splat);
+        }
         self.proposal = target.evaluate(&mut self.cx, std::mem::take(&mut self.proposal));
         if self.clamp.is_finite() {
             self.proposal.clamp_value(self.clamp);
@@ -367,6 +377,25 @@ impl<S: State> Chain<S> {
         }
     }
 
+    /// A step that keeps the state without evaluating a proposal: a film step of a state that
+    /// does not read its film numbers (`film`, counted as a small step accepted), or a jump
+    /// that found no path to propose. The state splats alone.
+    fn stay(&mut self, film: bool, splat: &mut impl FnMut(&mut S, f32)) {
+        let h = self.stats.bridge.level;
+        if h > 0.0 {
+            self.stats.bridge.states.push(1.0 / (f64::from(self.current.value()) + h));
+        }
+        if film {
+            let s = &mut self.stats;
+            s.mutations += 1;
+            s.small_steps_proposed += 1;
+            s.small_steps_accepted += 1;
+            s.film_steps_proposed += 1;
+            s.film_steps_accepted += 1;
+        }
+        splat(&mut self.current, 1.0);
+    }
+
     /// Settles the evaluated proposal, accepted with probability `a`: adds the step to the
     /// bridge sums, splats proposal and current state with their expected weights, and accepts
     /// (keeping the proposal's held evaluation) or rejects. Returns whether it accepted.
@@ -396,13 +425,8 @@ impl<S: State> Chain<S> {
     fn jump(&mut self, target: &impl Target<State = S>, mut splat: impl FnMut(&mut S, f32)) {
         self.stats.mutations += 1;
         self.stats.jumps_proposed += 1;
-        let h = self.stats.bridge.level;
         let Some(jacobian) = target.jump(&mut self.cx, &mut self.rng, &self.current, &mut self.proposal) else {
-            if h > 0.0 {
-                self.stats.bridge.states.push(1.0 / (f64::from(self.current.value()) + h));
-            }
-            splat(&mut self.current, 1.0);
-            return;
+            return self.stay(false, &mut splat);
         };
         if self.clamp.is_finite() {
             self.proposal.clamp_value(self.clamp);
@@ -457,5 +481,35 @@ mod tests {
             b.mutate(&target, None);
         }
         assert_eq!(b.stats.large_steps_proposed, 50);
+    }
+
+    /// A film step of a state that does not read its film numbers (light tracing, `t = 1`)
+    /// proposes the state itself: the state stays and no ray is traced. Every other state's
+    /// film step is evaluated.
+    #[test]
+    fn film_steps_of_states_that_do_not_read_the_film_trace_nothing() {
+        let mut scene = crate::scenes::default_scene().build().unwrap();
+        scene.set_resolution(16, 16);
+        let target =
+            TemperedTarget::new(&scene, 2, Tempering { a: 0.0, heuristic: Heuristic::Power, roughen_mis: false }, 0.0);
+        let (mut unread, mut read) = (0, 0);
+        for seed in 0..200 {
+            let sampler = PssSampler::new(seed, 0, 0.01, 0.0).with_film_steps(1.0, 0.02);
+            let mut chain = Chain::start(&target, sampler, Pcg32::new(seed, 1), 2);
+            for _ in 0..5 {
+                let (rays, value) = (chain.rays(), chain.state().value());
+                if chain.state().film_unread() {
+                    unread += 1;
+                    chain.mutate(&target, None);
+                    assert_eq!((chain.rays(), chain.state().value()), (rays, value));
+                } else {
+                    read += 1;
+                    chain.mutate(&target, None);
+                    assert!(chain.rays() > rays);
+                }
+            }
+            assert_eq!((chain.stats.film_steps_proposed, chain.stats.small_steps_proposed), (5, 5));
+        }
+        assert!(unread > 100 && read > 300, "{unread} states without film numbers, {read} with");
     }
 }

@@ -22,13 +22,16 @@ pub struct Contribution {
     pub f: f32,
     /// The technique `s` (light-subpath vertices) the state chose.
     pub technique: usize,
+    /// The value does not depend on the film numbers (light tracing, `t = 1`, lands where its
+    /// connection reaches the film).
+    pub film_unread: bool,
     /// The value was NaN, infinite or negative (it then counts as zero).
     pub invalid: bool,
 }
 
 impl Contribution {
     pub const ZERO: Contribution =
-        Contribution { l: Rgb::ZERO, raster: Vec2::ZERO, f: 0.0, technique: 0, invalid: false };
+        Contribution { l: Rgb::ZERO, raster: Vec2::ZERO, f: 0.0, technique: 0, film_unread: false, invalid: false };
 }
 
 impl State for Contribution {
@@ -42,6 +45,10 @@ impl State for Contribution {
 
     fn technique(&self) -> usize {
         self.technique
+    }
+
+    fn film_unread(&self) -> bool {
+        self.film_unread
     }
 
     fn splat(&self, splats: &SharedSplats, scale: f32) {
@@ -145,20 +152,20 @@ impl Evaluated {
     /// as its luminance times [`Self::factor`]; an invalid value (NaN, infinite or negative)
     /// gives a zero contribution marked invalid.
     pub fn contribution(&self, l: Rgb, weight: f32) -> Contribution {
-        let zero = Contribution { technique: self.s, ..Contribution::ZERO };
+        let zero = Contribution { technique: self.s, film_unread: self.t == 1, ..Contribution::ZERO };
         let l = l * (weight * self.n as f32);
         let f = luminance(l) * self.factor;
         if !valid_radiance(l) || !f.is_finite() {
             return Contribution { invalid: true, ..zero };
         }
-        Contribution { l, raster: self.landing(), f: f.max(0.0), technique: self.s, invalid: false }
+        Contribution { l, raster: self.landing(), f: f.max(0.0), ..zero }
     }
 
     /// The contribution of the evaluated strategy (zero when it could not be connected).
     pub fn untempered(&self) -> Contribution {
         match &self.connection {
             Some(c) => self.contribution(c.l, c.weight),
-            None => Contribution { technique: self.s, ..Contribution::ZERO },
+            None => Contribution { technique: self.s, film_unread: self.t == 1, ..Contribution::ZERO },
         }
     }
 }

@@ -67,6 +67,10 @@ impl State for TemperedState {
         self.contribution.technique
     }
 
+    fn film_unread(&self) -> bool {
+        self.contribution.film_unread
+    }
+
     fn splat(&self, splats: &SharedSplats, scale: f32) {
         self.contribution.splat(splats, scale);
     }
