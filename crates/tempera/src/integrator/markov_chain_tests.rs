@@ -392,40 +392,26 @@ fn mmlt_reallotted_by_measured_error_agrees_with_bdpt() {
     assert!(out.chains.iter().any(|d| d.mutations > 0));
 }
 
-/// MMLT whose chains also jump between the techniques of their paths ([`crate::mcmc::jump`])
-/// renders what BDPT renders: on the Cornell box and on the default scene (rough glass and
-/// gold, every vertex's sampling inverted), with many jumps accepted at every depth `k ≥ 1`.
+/// MMLT whose chains also jump between the techniques of their paths ([`crate::mcmc::jump`]),
+/// or whose small steps are often film steps (which move the film position alone), renders
+/// what BDPT renders: on the Cornell box and on the default scene (rough glass and gold, every
+/// vertex's sampling inverted), with many jumps or film steps accepted at every depth `k ≥ 1`.
 #[test]
-fn mmlt_with_jumps_agrees_with_bdpt() {
+fn mmlt_with_jumps_or_film_steps_agrees_with_bdpt() {
     let mut default = crate::scenes::default_scene().build().unwrap();
     default.set_resolution(32, 32);
     let cornell = crate::scenes::cornell_box(32, 32).build().unwrap();
     for (name, scene) in [("cornell box", cornell), ("default scene", default)] {
         let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
-        let m = MmltIntegrator { bootstrap: 200_000, jumps: 0.3, ..MmltIntegrator::new(5) };
-        let jumps = render_with(&scene, &m, Budget::Samples(2048), 2, 0);
-        assert_agree(name, &jumps.image, &bdpt.image, 8, 0.01);
-        for d in jumps.chains.iter().filter(|d| d.depth >= 1) {
-            assert!(d.jumps_accepted > 500, "{name}: {d:?}");
-        }
-    }
-}
-
-/// MMLT whose small steps are often film steps, which move the film position alone, renders
-/// what BDPT renders, on the Cornell box and the default scene, with many film steps accepted
-/// at every depth `k ≥ 1`.
-#[test]
-fn mmlt_with_film_steps_agrees_with_bdpt() {
-    let mut default = crate::scenes::default_scene().build().unwrap();
-    default.set_resolution(32, 32);
-    let cornell = crate::scenes::cornell_box(32, 32).build().unwrap();
-    for (name, scene) in [("cornell box", cornell), ("default scene", default)] {
-        let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
-        let m = MmltIntegrator { bootstrap: 200_000, film_steps: 0.5, ..MmltIntegrator::new(5) };
-        let film = render_with(&scene, &m, Budget::Samples(2048), 2, 0);
-        assert_agree(name, &film.image, &bdpt.image, 8, 0.01);
-        for d in film.chains.iter().filter(|d| d.depth >= 1) {
-            assert!(d.film_steps_accepted > 500, "{name}: {d:?}");
+        let jumps = MmltIntegrator { bootstrap: 200_000, jumps: 0.3, ..MmltIntegrator::new(5) };
+        let film = MmltIntegrator { jumps: 0.0, film_steps: 0.5, ..jumps };
+        for (m, step) in [(jumps, "jumps"), (film, "film steps")] {
+            let out = render_with(&scene, &m, Budget::Samples(2048), 2, 0);
+            assert_agree(name, &out.image, &bdpt.image, 8, 0.01);
+            for d in out.chains.iter().filter(|d| d.depth >= 1) {
+                let accepted = if m.jumps > 0.0 { d.jumps_accepted } else { d.film_steps_accepted };
+                assert!(accepted > 500, "{name}, {step}: {d:?}");
+            }
         }
     }
 }
