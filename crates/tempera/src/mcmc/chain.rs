@@ -339,7 +339,13 @@ impl<S: State> Chain<S> {
         if film && self.current.film_unread() {
             // The proposal is the state itself, accepted: no evaluation needed.
             self.cx.sampler.reject();
-            return self.stay(true, &mut splat);
+            let s = &mut self.stats;
+            s.mutations += 1;
+            s.small_steps_proposed += 1;
+            s.small_steps_accepted += 1;
+            s.film_steps_proposed += 1;
+            s.film_steps_accepted += 1;
+            return self.stay(&mut splat);
         }
         self.proposal = target.evaluate(&mut self.cx, std::mem::take(&mut self.proposal));
         if self.clamp.is_finite() {
@@ -377,21 +383,13 @@ impl<S: State> Chain<S> {
         }
     }
 
-    /// A step that keeps the state without evaluating a proposal: a film step of a state that
-    /// does not read its film numbers (`film`, counted as a small step accepted), or a jump
-    /// that found no path to propose. The state splats alone.
-    fn stay(&mut self, film: bool, splat: &mut impl FnMut(&mut S, f32)) {
+    /// A step that keeps the state without evaluating a proposal (a film step of a state that
+    /// does not read its film numbers, or a jump that found no path to propose): the state
+    /// splats alone and adds itself to the bridge sums. The caller counts the step.
+    fn stay(&mut self, splat: &mut impl FnMut(&mut S, f32)) {
         let h = self.stats.bridge.level;
         if h > 0.0 {
             self.stats.bridge.states.push(1.0 / (f64::from(self.current.value()) + h));
-        }
-        if film {
-            let s = &mut self.stats;
-            s.mutations += 1;
-            s.small_steps_proposed += 1;
-            s.small_steps_accepted += 1;
-            s.film_steps_proposed += 1;
-            s.film_steps_accepted += 1;
         }
         splat(&mut self.current, 1.0);
     }
@@ -426,7 +424,7 @@ impl<S: State> Chain<S> {
         self.stats.mutations += 1;
         self.stats.jumps_proposed += 1;
         let Some(jacobian) = target.jump(&mut self.cx, &mut self.rng, &self.current, &mut self.proposal) else {
-            return self.stay(false, &mut splat);
+            return self.stay(&mut splat);
         };
         if self.clamp.is_finite() {
             self.proposal.clamp_value(self.clamp);

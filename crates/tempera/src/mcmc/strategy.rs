@@ -152,7 +152,7 @@ impl Evaluated {
     /// as its luminance times [`Self::factor`]; an invalid value (NaN, infinite or negative)
     /// gives a zero contribution marked invalid.
     pub fn contribution(&self, l: Rgb, weight: f32) -> Contribution {
-        let zero = Contribution { technique: self.s, film_unread: self.t == 1, ..Contribution::ZERO };
+        let zero = self.zero();
         let l = l * (weight * self.n as f32);
         let f = luminance(l) * self.factor;
         if !valid_radiance(l) || !f.is_finite() {
@@ -165,8 +165,13 @@ impl Evaluated {
     pub fn untempered(&self) -> Contribution {
         match &self.connection {
             Some(c) => self.contribution(c.l, c.weight),
-            None => Contribution { technique: self.s, film_unread: self.t == 1, ..Contribution::ZERO },
+            None => self.zero(),
         }
+    }
+
+    /// A zero contribution of the evaluated strategy.
+    fn zero(&self) -> Contribution {
+        Contribution { technique: self.s, film_unread: self.t == 1, ..Contribution::ZERO }
     }
 }
 
