@@ -117,6 +117,16 @@ pub struct DepthRecord {
     /// the bridge ratios down the ladder (absent where not estimated).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub b_ladder: f64,
+    /// Where a per-pixel map shapes the target: the unshaped normalisation from the
+    /// normaliser's samples and its relative standard error, and the chains' mean splat
+    /// weight (luminance per unit of target), whose product with `b` is the chains' estimate of
+    /// the same (absent where not shaped).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub b_plain: f64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub b_plain_rel_se: f64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub splat_weight: f64,
     pub bootstrap_samples: u64,
     pub large_step_samples: u64,
     /// Non-zero values among the bootstrap samples.
@@ -250,6 +260,9 @@ impl DepthRecord {
             b_bridge: d.b_bridge,
             b_bridge_rel_se: d.b_bridge_rel_se,
             b_ladder: d.b_ladder,
+            b_plain: d.b_plain,
+            b_plain_rel_se: d.b_plain_rel_se,
+            splat_weight: if d.b_plain > 0.0 && d.mutations > 0 { d.splat_weight / d.mutations as f64 } else { 0.0 },
             bootstrap_samples: d.bootstrap_samples,
             large_step_samples: d.large_step_samples,
             bootstrap_nonzero: d.bootstrap_nonzero,

@@ -39,7 +39,7 @@ pub fn depth_normaliser(
         debug_assert!(clamp.is_infinite(), "depth 0's normaliser cannot estimate a clamped target");
         // Depth 0's target is not one of these estimates' terms: its variance is not theirs.
         super::direct::direct_emission(scene, seed, samples)
-            .map(|(moments, rays)| (NormaliserMoments { moments, one_sample_sum2: None }, rays))
+            .map(|(moments, rays)| (NormaliserMoments { moments, one_sample_sum2: None, plain: None }, rays))
     } else {
         Some(all_strategies(scene, k, seed, samples, (clamp, importance)))
     }
@@ -47,7 +47,8 @@ pub fn depth_normaliser(
 
 /// `samples` all-strategy estimates of `b_k` for depth `k ≥ 1` (seeded by `seed`) under the
 /// target clamped at `clamp` (infinite: none) and shaped by `importance`: their moments, with
-/// the second moment of MMLT's one-strategy value given each sample ([`NormaliserMoments`]),
+/// the second moment of MMLT's one-strategy value given each sample and, with a map, the
+/// moments of the same samples' unshaped and unclamped estimates ([`NormaliserMoments`]),
 /// and the rays traced.
 pub fn all_strategies(
     scene: &Scene,
@@ -56,42 +57,46 @@ pub fn all_strategies(
     samples: usize,
     (clamp, importance): (f32, Option<&ImportanceMap>),
 ) -> (NormaliserMoments, u64) {
-    let values: Vec<(f64, f64, u64)> = (0..samples)
+    let values: Vec<(f64, f64, f64, u64)> = (0..samples)
         .into_par_iter()
         .map_init(Paths::default, |paths, i| {
             let mut sampler = IndependentSampler::new(hash(&[seed, 0xa115, k as u64, i as u64]), k as u64);
             sample(scene, k, &mut sampler, paths, (clamp, importance))
         })
         .collect();
-    let (mut moments, mut one_sample_sum2) = (Moments::default(), 0.0);
-    for &(v, one2, _) in &values {
+    let (mut moments, mut one_sample_sum2, mut plain) = (Moments::default(), 0.0, Moments::default());
+    for &(v, one2, p, _) in &values {
         moments.push(v);
         one_sample_sum2 += one2;
+        plain.push(p);
     }
-    (NormaliserMoments { moments, one_sample_sum2: Some(one_sample_sum2) }, values.iter().map(|v| v.2).sum())
+    let plain = importance.is_some().then_some(plain);
+    (NormaliserMoments { moments, one_sample_sum2: Some(one_sample_sum2), plain }, values.iter().map(|v| v.3).sum())
 }
 
 /// One estimate: the sum over the strategies of depth `k` of their MIS-weighted luminance
 /// `Y_s`; the second moment `n Σ_s Y_s²` of MMLT's target `n·Y_s` (one of the `n = k + 2`
-/// strategies picked uniformly) on the same subpaths; and the rays traced. With a finite
-/// `clamp`, each `Y_s` is `min(n·Y_s, clamp)/n`; with an `importance` map, `Y_s` is first
-/// multiplied by its factor where the contribution lands.
+/// strategies picked uniformly) on the same subpaths; the sum of the luminances alone,
+/// neither clamped nor shaped; and the rays traced. With a finite `clamp`, each `Y_s` is
+/// `min(n·Y_s, clamp)/n`; with an `importance` map, `Y_s` is first multiplied by its factor
+/// where the contribution lands.
 fn sample(
     scene: &Scene,
     k: usize,
     sampler: &mut IndependentSampler,
     paths: &mut Paths,
     (clamp, importance): (f32, Option<&ImportanceMap>),
-) -> (f64, f64, u64) {
-    let (mut sum, mut sum2) = (0.0, 0.0);
+) -> (f64, f64, f64, u64) {
+    let (mut sum, mut sum2, mut plain) = (0.0, 0.0, 0.0);
     let n = (k + 2) as f64;
     let rays = each_strategy(scene, k, sampler, paths, |p, l| {
+        plain += f64::from(target_value(luminance(l)));
         let y = f64::from(target_value(luminance(l) * ImportanceMap::of(importance, k, p)));
         let y = if clamp.is_finite() { (n * y).min(f64::from(clamp)) / n } else { y };
         sum += y;
         sum2 += y * y;
     });
-    (sum, n * sum2, rays)
+    (sum, n * sum2, plain, rays)
 }
 
 /// Samples one camera and one light subpath for depth `k ≥ 1` and hands every strategy's

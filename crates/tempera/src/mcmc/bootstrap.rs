@@ -243,6 +243,7 @@ impl Bootstrap {
             let rest = NormaliserMoments {
                 moments: others(&normaliser.moments, &norm.moments),
                 one_sample_sum2: normaliser.one_sample_sum2.zip(norm.one_sample_sum2).map(|(all, f)| all - f),
+                plain: None,
             };
             let ma = norm.moments.mean_and_rel_se().0;
             let wa = precision(&rest.moments, norm.moments.n);
@@ -269,6 +270,17 @@ impl Bootstrap {
         let weighed = normaliser.target_variance().unwrap_or_else(|| per_sample_variance(&all_values)) / n;
         let var_b = weighed.max(per_sample_variance(&plain) / n);
         (mean, if mean > 0.0 { combined_variance(var_a, weighed, var_b).sqrt() / mean } else { 0.0 })
+    }
+
+    /// Where a per-pixel map shapes the group's target: the unshaped normalisation (the
+    /// depth's total luminance) as the normaliser's samples estimate it, with its relative
+    /// standard error ([`NormaliserMoments::plain`]); `None` where the target is not shaped.
+    pub fn plain_normalisation(&self) -> Option<(f64, f64)> {
+        let mut all = Moments::default();
+        for fold in self.normaliser.as_ref()? {
+            all.merge(fold.plain.as_ref()?);
+        }
+        (all.n > 0).then(|| all.mean_and_rel_se())
     }
 
     /// The moments of the bootstrap values whose index is `f` modulo `folds`.
@@ -416,9 +428,11 @@ mod tests {
             let values: Vec<f32> = draw(&mut rng, n_values, 0.5, 50.0, 0.01).iter().map(|&v| v as f32).collect();
             let norm = draw(&mut rng, n_normaliser, 0.8, 20.0, 0.01);
             let all = moments(&values.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
-            let folds = norm
-                .chunks(n_normaliser / FOLDS)
-                .map(|c| NormaliserMoments { moments: moments(c), one_sample_sum2: None });
+            let folds = norm.chunks(n_normaliser / FOLDS).map(|c| NormaliserMoments {
+                moments: moments(c),
+                one_sample_sum2: None,
+                plain: None,
+            });
             let boot = bootstrap(values, folds.collect());
             cross.push(boot.normalisation(&Moments::default()).0);
             let (a, rel_a) = moments(&norm).mean_and_rel_se();
@@ -474,6 +488,7 @@ mod tests {
             .map(|c| NormaliserMoments {
                 moments: moments(&c.iter().map(|v| v.0).collect::<Vec<_>>()),
                 one_sample_sum2: with_variance.then(|| c.iter().map(|v| v.1).sum()),
+                plain: None,
             })
             .collect()
     }

@@ -20,6 +20,12 @@ pub trait State: Default {
     fn technique(&self) -> usize;
     /// Adds the state's contributions, each times `scale`, to the film.
     fn splat(&self, splats: &SharedSplats, scale: f32);
+    /// The luminance a splat of the state carries per unit of its target value: 1 where the
+    /// target is the contribution's luminance, the inverse of the map's factor where a
+    /// per-pixel map shapes it ([`super::importance`]).
+    fn weight(&self) -> f32 {
+        1.0
+    }
     /// Clamps the target value at `c` (the contributions stay): only states of targets that
     /// are [`Target::clampable`] are ever clamped, so the others keep their value.
     fn clamp_value(&mut self, _c: f32) {}
@@ -391,6 +397,7 @@ impl<S: State> Chain<S> {
         if h > 0.0 {
             self.stats.bridge.states.push(1.0 / (f64::from(self.current.value()) + h));
         }
+        self.stats.splat_weight += f64::from(self.current.weight());
         splat(&mut self.current, 1.0);
     }
 
@@ -403,6 +410,7 @@ impl<S: State> Chain<S> {
             let (pv, cv, a) = (f64::from(self.proposal.value()), f64::from(self.current.value()), f64::from(a));
             self.stats.bridge.states.push(a / (pv + h) + (1.0 - a) / (cv + h));
         }
+        self.stats.splat_weight += f64::from(a * self.proposal.weight() + (1.0 - a) * self.current.weight());
         splat(&mut self.proposal, a);
         splat(&mut self.current, 1.0 - a);
         let accepted = self.rng.next_f32() < a;

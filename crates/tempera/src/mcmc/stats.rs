@@ -33,6 +33,15 @@ pub struct DepthStats {
     pub film_steps_accepted: u64,
     /// Proposals whose value was NaN, infinite or negative (counted as zero).
     pub invalid: u64,
+    /// The luminance the chains splatted per unit of target value, summed over their
+    /// mutations with each splat's expected weight ([`super::State::weight`]): `mutations`
+    /// where the target is the contribution's luminance, more where a per-pixel map shapes it.
+    pub splat_weight: f64,
+    /// Where a per-pixel map shapes the target: the unshaped normalisation from the
+    /// normaliser's samples and its relative standard error
+    /// ([`super::Bootstrap::plain_normalisation`]; 0: none). Set when the image is developed.
+    pub b_plain: f64,
+    pub b_plain_rel_se: f64,
     pub seconds: f64,
     /// Wall-clock time the group's preparation took before its first mutation (tempered MMLT:
     /// the ladder's burn-in and the calibration), shared by all threads.
@@ -164,6 +173,7 @@ impl DepthStats {
         for &x in self.ladder_bridge.iter().flat_map(|p| p.upper.iter().chain(&p.lower)) {
             w.f64(x);
         }
+        w.f64(self.splat_weight);
     }
 
     /// Statistics [`Self::encode`] wrote.
@@ -225,6 +235,7 @@ impl DepthStats {
         for x in d.ladder_bridge.iter_mut().flat_map(|p| p.upper.iter_mut().chain(&mut p.lower)) {
             *x = r.f64();
         }
+        d.splat_weight = r.f64();
         d
     }
 
@@ -240,6 +251,7 @@ impl DepthStats {
         self.film_steps_proposed += o.film_steps_proposed;
         self.film_steps_accepted += o.film_steps_accepted;
         self.invalid += o.invalid;
+        self.splat_weight += o.splat_weight;
         self.seconds += o.seconds;
         self.independent |= o.independent;
         self.hybrid_samples += o.hybrid_samples;
@@ -288,12 +300,22 @@ impl DepthStats {
 pub struct NormaliserMoments {
     pub moments: Moments,
     pub one_sample_sum2: Option<f64>,
+    /// Where a per-pixel map shapes the target ([`super::importance`]): the moments of the
+    /// same samples' unshaped estimates, whose mean is the depth's total luminance.
+    pub plain: Option<Moments>,
 }
 
 impl NormaliserMoments {
     pub fn merge(&mut self, o: &NormaliserMoments) {
         self.moments.merge(&o.moments);
         self.one_sample_sum2 = self.one_sample_sum2.zip(o.one_sample_sum2).map(|(a, b)| a + b);
+        self.plain = match (self.plain, o.plain) {
+            (Some(mut a), Some(b)) => {
+                a.merge(&b);
+                Some(a)
+            }
+            (a, b) => a.or(b),
+        };
     }
 
     /// The target's own per-sample variance as the normaliser's samples measure it (`None`:

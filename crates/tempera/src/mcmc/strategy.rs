@@ -55,6 +55,10 @@ impl State for Contribution {
         splats.add(self.raster, self.l * scale);
     }
 
+    fn weight(&self) -> f32 {
+        if self.f > 0.0 { luminance(self.l) / self.f } else { 0.0 }
+    }
+
     fn clamp_value(&mut self, c: f32) {
         self.f = self.f.min(c);
     }

@@ -74,6 +74,10 @@ impl State for TemperedState {
     fn splat(&self, splats: &SharedSplats, scale: f32) {
         self.contribution.splat(splats, scale);
     }
+
+    fn weight(&self) -> f32 {
+        if self.value > 0.0 { crate::math::luminance(self.contribution.l) / self.value } else { 0.0 }
+    }
 }
 
 /// How the targets of hot replicas are flattened.
