@@ -111,21 +111,6 @@ pub(super) fn sum_splats<L>(cluster: &dyn Cluster, groups: &[Option<Group<L>>]) 
         .collect()
 }
 
-/// Where a per-pixel map shapes a depth's target ([`super::importance`]), the factor its
-/// chains' image is scaled by. The image estimates the depth's total luminance as `b·w̄`, `b`
-/// the shaped normalisation and `w̄` the chains' mean splat weight ([`super::State::weight`]:
-/// the luminance a splat carries per unit of shaped target), so it carries the error of both;
-/// the normaliser's unshaped samples estimate the same total independently of the chains, as
-/// `b_plain`. The image takes the mean of the two, `(b·w̄ + b_plain)/2`, consistent as each
-/// is. A fixed weight, not one from the estimates' reported errors: a heavy-tailed sample set
-/// that has not met its rare bright paths reports both a low mean and a small error, and
-/// weights taken from it would favour it (see [`super::Bootstrap::normalisation`]). `None`
-/// where either estimate is not positive.
-pub(super) fn plain_factor(b: f64, mean_weight: f64, b_plain: f64) -> Option<f64> {
-    let chains = b * mean_weight;
-    (chains > 0.0 && chains.is_finite() && b_plain > 0.0 && b_plain.is_finite()).then(|| 0.5 + 0.5 * b_plain / chains)
-}
-
 /// The image and per-group statistics of the walkers' `reports` so far: statistics merged in
 /// walker order, each layer's normalisation `b_l` refined with the large-step proposals, each
 /// layer's splats (`summed` over the ranks, else the groups' own) scaled to estimate its share
@@ -184,6 +169,7 @@ pub(super) fn develop<L: Layers>(
             prior.mean_and_rel_se()
         };
         (d.b, d.b_rel_se) = boot.normalisation(&large[k][0]);
+        (d.b_plain, d.b_plain_rel_se) = boot.plain_normalisation().unwrap_or((0.0, 0.0));
         // A mixture chain's states follow the mixture of targets, not the group's own.
         let mixture = groups[k].as_ref().is_some_and(|g| g.shared.mixture());
         if !d.independent
@@ -212,13 +198,6 @@ pub(super) fn develop<L: Layers>(
         if d.mutations == 0 {
             continue;
         }
-        // One chain per walker (no replicas, no mixture) splatting by the walker's own
-        // expected weights, and no independent samples combined at this depth.
-        let single_chains = !group.shared.mixture()
-            && group.shared.valued() == 1
-            && d.swaps.is_none()
-            && !d.independent
-            && !hybrid.is_some_and(|(depths, _)| depths.iter().any(|x| x.k == k));
         // Layer l estimates its share of the group's image per mutation: N_pixels · b_l/ρ_l / M_k
         // (MMLT's N_pixels · b_k / M_k for one layer).
         let mut layer_b = Vec::with_capacity(group.splats.len());
@@ -235,14 +214,6 @@ pub(super) fn develop<L: Layers>(
                 (0, _) => (d.b, 1.0),
                 (_, Some((moments, ratio))) => (refine(moments, &large[k][l]).0, ratio),
                 (_, None) => continue,
-            };
-            // A shaped depth's brightness, also estimated by its unshaped normaliser samples.
-            let b = match boot.plain_normalisation() {
-                Some((plain, rel)) if l == 0 && single_chains => {
-                    (d.b_plain, d.b_plain_rel_se) = (plain, rel);
-                    b * plain_factor(b, d.splat_weight / d.mutations as f64, plain).unwrap_or(1.0)
-                }
-                _ => b,
             };
             layer_b.push(b);
             if l + 1 == group.shared.valued() && l > 0 && !group.shared.mixture() {

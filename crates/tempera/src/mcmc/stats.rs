@@ -39,7 +39,9 @@ pub struct DepthStats {
     pub splat_weight: f64,
     /// Where a per-pixel map shapes the target: the unshaped normalisation from the
     /// normaliser's samples and its relative standard error
-    /// ([`super::Bootstrap::plain_normalisation`]; 0: none). Set when the image is developed.
+    /// ([`super::Bootstrap::plain_normalisation`]; 0: none), an estimate of the depth's total
+    /// luminance independent of the chains', `b · splat_weight / mutations`. Set when the
+    /// image is developed.
     pub b_plain: f64,
     pub b_plain_rel_se: f64,
     pub seconds: f64,
