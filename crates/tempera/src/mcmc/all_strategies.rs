@@ -90,8 +90,9 @@ fn sample(
     let (mut sum, mut sum2, mut plain) = (0.0, 0.0, 0.0);
     let n = (k + 2) as f64;
     let rays = each_strategy(scene, k, sampler, paths, |p, l| {
-        plain += f64::from(target_value(luminance(l)));
-        let y = f64::from(target_value(luminance(l) * ImportanceMap::of(importance, k, p)));
+        let lum = luminance(l);
+        plain += f64::from(target_value(lum));
+        let y = f64::from(target_value(lum * ImportanceMap::of(importance, k, p)));
         let y = if clamp.is_finite() { (n * y).min(f64::from(clamp)) / n } else { y };
         sum += y;
         sum2 += y * y;

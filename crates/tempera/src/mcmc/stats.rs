@@ -35,7 +35,8 @@ pub struct DepthStats {
     pub invalid: u64,
     /// The luminance the chains splatted per unit of target value, summed over their
     /// mutations with each splat's expected weight ([`super::State::weight`]): `mutations`
-    /// where the target is the contribution's luminance, more where a per-pixel map shapes it.
+    /// where the target is the contribution's luminance; where a per-pixel map shapes it, the
+    /// mutations weighted by the inverse of the map's factor where each splat landed.
     pub splat_weight: f64,
     /// Where a per-pixel map shapes the target: the unshaped normalisation from the
     /// normaliser's samples and its relative standard error
