@@ -42,6 +42,12 @@ pub struct IntegratorFlags {
     /// (MMLT's default 0: never; tempered MMLT's 0.3).
     #[arg(long)]
     pub film_steps: Option<f32>,
+    /// MMLT and tempered MMLT: the probability that a small step is a lens step, which moves
+    /// the film position as a film step does and re-aims the first camera vertex at the path's
+    /// second, keeping the rest of the path (default 0: never). Film and lens steps share the
+    /// small steps: a lens step takes what the film steps leave of the probability.
+    #[arg(long)]
+    pub lens_steps: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths: in proportion to their
     /// normalisation b_k (MMLT's default), to b_k times the spread of their light over their
     /// paths, or (tempered MMLT only, its default) by b_k times spread at the depths with
@@ -241,6 +247,7 @@ impl IntegratorFlags {
             sigma: self.sigma,
             jumps: self.jumps,
             film_steps: self.film_steps,
+            lens_steps: self.lens_steps,
             allocation: self.allocation,
             independent_below: self.independent_below,
             normaliser_share: self.normaliser_share,

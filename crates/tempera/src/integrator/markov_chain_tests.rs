@@ -393,11 +393,13 @@ fn mmlt_reallotted_by_measured_error_agrees_with_bdpt() {
 }
 
 /// MMLT whose chains also jump between the techniques of their paths ([`crate::mcmc::jump`]),
-/// or whose small steps are often film steps (which move the film position alone), renders
-/// what BDPT renders: on the Cornell box and on the default scene (rough glass and gold, every
-/// vertex's sampling inverted), with many jumps or film steps accepted at every depth `k ≥ 1`.
+/// or whose small steps are often film steps (which move the film position alone) or lens
+/// steps (which move it and keep the path's second camera vertex, [`crate::mcmc::lens`]),
+/// renders what BDPT renders: on the Cornell box and on the default scene (rough glass and
+/// gold, every vertex's sampling inverted), with many of them accepted at every depth `k ≥ 1`
+/// (lens steps: `k ≥ 2`, where a technique has three camera vertices).
 #[test]
-fn mmlt_with_jumps_or_film_steps_agrees_with_bdpt() {
+fn mmlt_with_jumps_film_or_lens_steps_agrees_with_bdpt() {
     let mut default = crate::scenes::default_scene().build().unwrap();
     default.set_resolution(32, 32);
     let cornell = crate::scenes::cornell_box(32, 32).build().unwrap();
@@ -405,11 +407,16 @@ fn mmlt_with_jumps_or_film_steps_agrees_with_bdpt() {
         let bdpt = render_with(&scene, &BdptIntegrator::new(5), Budget::Samples(256), 1, 0);
         let jumps = MmltIntegrator { bootstrap: 200_000, jumps: 0.3, ..MmltIntegrator::new(5) };
         let film = MmltIntegrator { jumps: 0.0, film_steps: 0.5, ..jumps };
-        for (m, step) in [(jumps, "jumps"), (film, "film steps")] {
+        let lens = MmltIntegrator { film_steps: 0.0, lens_steps: 0.5, ..film };
+        for (m, step) in [(jumps, "jumps"), (film, "film steps"), (lens, "lens steps")] {
             let out = render_with(&scene, &m, Budget::Samples(2048), 2, 0);
             assert_agree(name, &out.image, &bdpt.image, 8, 0.01);
-            for d in out.chains.iter().filter(|d| d.depth >= 1) {
-                let accepted = if m.jumps > 0.0 { d.jumps_accepted } else { d.film_steps_accepted };
+            for d in out.chains.iter().filter(|d| d.depth >= 1 + usize::from(m.lens_steps > 0.0)) {
+                let accepted = match step {
+                    "jumps" => d.jumps_accepted,
+                    "film steps" => d.film_steps_accepted,
+                    _ => d.lens_steps_accepted,
+                };
                 assert!(accepted > 500, "{name}, {step}: {d:?}");
             }
         }

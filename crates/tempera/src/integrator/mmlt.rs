@@ -8,6 +8,7 @@ use super::{Integrator, RenderControl, RenderOutput, RenderSettings};
 use crate::math::rng::Pcg32;
 use crate::mcmc::all_strategies::depth_normaliser;
 use crate::mcmc::importance::ImportanceMap;
+use crate::mcmc::lens::{self, LensStep};
 use crate::mcmc::{
     ChainSettings, Contribution, EvalContext, NormaliserMoments, Single, Target, evaluate_connection, evaluate_depths,
 };
@@ -27,6 +28,8 @@ pub struct MmltIntegrator {
     /// The probability that a small step is a film step, which moves the film position alone
     /// ([`crate::sampler::PssSampler::with_film_steps`]; 0: never).
     pub film_steps: f32,
+    /// The probability that a small step is a lens step ([`crate::mcmc::lens`]; 0: never).
+    pub lens_steps: f32,
     pub large_step_probability: f32,
     /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
     pub spread_allocation: bool,
@@ -88,6 +91,7 @@ impl MmltIntegrator {
             sigma: 0.01,
             jumps: 0.0,
             film_steps: 0.0,
+            lens_steps: 0.0,
             large_step_probability: 0.3,
             spread_allocation: false,
             depth_images: false,
@@ -127,8 +131,9 @@ impl Target for DepthTarget<'_> {
         let mut paths = std::mem::take(&mut cx.paths);
         let e = evaluate_connection(self.scene, self.depth, cx, &mut paths, self.importance);
         cx.paths = paths;
-        // Recorded only for chains that jump: a copy per mutation otherwise spent for nothing.
-        if cx.sampler.jump_probability() > 0.0 {
+        // Recorded only for chains that jump or take lens steps: a copy per mutation otherwise
+        // spent for nothing.
+        if cx.sampler.jump_probability() > 0.0 || cx.sampler.lens_step_probability() > 0.0 {
             cx.last = Some(e);
         }
         e.untempered()
@@ -175,6 +180,25 @@ impl Target for DepthTarget<'_> {
         *proposal = e.untempered();
         Some(jacobian)
     }
+
+    /// Planned from the state's evaluation held in `cx` ([`crate::mcmc::lens`]).
+    fn lens_step(
+        &self,
+        cx: &mut EvalContext,
+        rng: &mut Pcg32,
+        current: &Contribution,
+        proposal: &mut Contribution,
+    ) -> LensStep {
+        let plan = cx.held.as_ref().and_then(|e| lens::plan(self.scene, e, &cx.held_paths));
+        match &plan {
+            None if current.film_unread => return LensStep::Stay,
+            Some(p) if !p.pin(self.scene, cx, rng) => return LensStep::Reject,
+            _ => {}
+        }
+        *proposal = self.evaluate(cx, std::mem::take(proposal));
+        let jacobian = lens::jacobian(self.scene, plan.as_ref(), cx.last.as_ref(), &cx.paths);
+        LensStep::Proposed { jacobian, lens: plan.is_some() }
+    }
 }
 
 impl Integrator for MmltIntegrator {
@@ -209,6 +233,7 @@ impl Integrator for MmltIntegrator {
         let chains = ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_jumps(self.jumps)
             .with_film_steps(self.film_steps)
+            .with_lens_steps(self.lens_steps)
             .with_spread_allocation(self.spread_allocation)
             .with_group_images(self.depth_images)
             .with_independent_below(self.independent_below)

@@ -99,6 +99,12 @@ pub struct Acceptance {
     pub film_step: f64,
     #[serde(default)]
     pub film_steps_proposed: u64,
+    /// The acceptance of lens steps ([`crate::mcmc::lens`]) and how many were proposed (among
+    /// the small steps; where a state has none, its step is a film step, counted as one).
+    #[serde(default)]
+    pub lens_step: f64,
+    #[serde(default)]
+    pub lens_steps_proposed: u64,
 }
 
 /// What the chains of one depth did.
@@ -285,6 +291,8 @@ impl DepthRecord {
                 jumps_proposed: d.jumps_proposed,
                 film_step: rate(d.film_steps_accepted, d.film_steps_proposed),
                 film_steps_proposed: d.film_steps_proposed,
+                lens_step: rate(d.lens_steps_accepted, d.lens_steps_proposed),
+                lens_steps_proposed: d.lens_steps_proposed,
             },
             invalid: d.invalid,
             seconds: d.seconds,

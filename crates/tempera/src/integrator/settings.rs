@@ -215,6 +215,10 @@ pub struct IntegratorSettings {
     /// MMLT and tempered MMLT: the probability that a small step moves the film position alone.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub film_steps: Option<f32>,
+    /// MMLT and tempered MMLT: the probability that a small step moves the film position and
+    /// keeps the path's second camera vertex (a lens step).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lens_steps: Option<f32>,
     /// MMLT and tempered MMLT: how mutations are allotted to path depths.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub allocation: Option<Allocation>,
@@ -399,6 +403,7 @@ impl IntegratorSettings {
             ("sigma", self.sigma.is_some(), chain),
             ("jumps", self.jumps.is_some(), kind == Mmlt || tempered),
             ("film_steps", self.film_steps.is_some(), kind == Mmlt || tempered),
+            ("lens_steps", self.lens_steps.is_some(), kind == Mmlt || tempered),
             ("allocation", self.allocation.is_some(), kind == Mmlt || tempered),
             ("independent_below", self.independent_below.is_some(), kind == Mmlt || tempered),
             ("normaliser_share", self.normaliser_share.is_some(), kind == Mmlt || tempered),
@@ -466,6 +471,7 @@ impl IntegratorSettings {
                 ("bdpt_above", self.bdpt_above.is_some()),
                 ("jumps", self.jumps.is_some()),
                 ("film_steps", self.film_steps.is_some()),
+                ("lens_steps", self.lens_steps.is_some()),
             ];
             if let Some((name, _)) = fixed.iter().find(|f| f.1) {
                 return Err(format!("the paper's setup fixes {name}; give one or the other"));
@@ -477,7 +483,7 @@ impl IntegratorSettings {
         check_range("independent_below", self.independent_below, 0..=100_000_000)?;
         check_probability("large_step", self.large_step.map(f64::from))?;
         check_probability("hot_large_step", self.hot_large_step.map(f64::from))?;
-        for (name, p) in [("jumps", self.jumps), ("film_steps", self.film_steps)] {
+        for (name, p) in [("jumps", self.jumps), ("film_steps", self.film_steps), ("lens_steps", self.lens_steps)] {
             if let Some(p) = p.filter(|p| !(0.0..=1.0).contains(p)) {
                 return Err(format!("{name} must be a probability in [0, 1], not {p}"));
             }

@@ -29,6 +29,7 @@ pub fn sampler_for(seed: u64, k: usize, i: usize, settings: &ChainSettings) -> P
         .with_first_state(hash(&[seed, 0xb007, i as u64]))
         .with_jumps(settings.jumps)
         .with_film_steps(settings.film_steps, FILM_STEP_WIDTH)
+        .with_lens_steps(settings.lens_steps, FILM_STEP_WIDTH)
 }
 
 /// Per-thread storage for evaluating independent samples one after the other.

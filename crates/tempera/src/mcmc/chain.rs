@@ -4,6 +4,7 @@
 //! that are NaN, infinite or negative count as zero. The chain keeps its state between calls, so
 //! time-budgeted renders can advance all chains in rounds.
 
+use super::lens::LensStep;
 use super::{DepthStats, Evaluated, Moments, NormaliserMoments};
 use crate::bidir::Paths;
 use crate::film::SharedSplats;
@@ -120,6 +121,18 @@ pub trait Target {
         _proposal: &mut Self::State,
     ) -> Option<f32> {
         None
+    }
+    /// Proposes a lens step of `current` (the state `cx.sampler` holds, a lens step begun):
+    /// moves its pixel and keeps the rest of its path ([`super::lens`]), evaluated into
+    /// `proposal`. Targets that are not of one path depth have none: their states stay.
+    fn lens_step(
+        &self,
+        _cx: &mut EvalContext,
+        _rng: &mut Pcg32,
+        _current: &Self::State,
+        _proposal: &mut Self::State,
+    ) -> LensStep {
+        LensStep::Stay
     }
 }
 
@@ -340,6 +353,9 @@ impl<S: State> Chain<S> {
             return self.jump(target, splat);
         }
         self.cx.sampler.start_iteration();
+        if self.cx.sampler.is_lens_step() {
+            return self.lens(target, splat);
+        }
         let large = self.cx.sampler.is_large_step();
         let film = self.cx.sampler.is_film_step();
         if film && self.current.film_unread() {
@@ -428,6 +444,42 @@ impl<S: State> Chain<S> {
 impl<S: State> Chain<S> {
     /// A reversible jump ([`Target::jump`]) in place of a mutation, accepted with
     /// `min(1, f(y)/f(x) · J)`; where none is begun the current state stays and splats alone.
+    /// A lens step ([`super::lens`]), begun by the sampler: a film step where the state has
+    /// none.
+    fn lens(&mut self, target: &impl Target<State = S>, mut splat: impl FnMut(&mut S, f32)) {
+        let s = &mut self.stats;
+        s.mutations += 1;
+        s.small_steps_proposed += 1;
+        let (jacobian, lens) = match target.lens_step(&mut self.cx, &mut self.rng, &self.current, &mut self.proposal) {
+            LensStep::Stay => {
+                self.cx.sampler.reject();
+                self.stats.small_steps_accepted += 1;
+                return self.stay(&mut splat);
+            }
+            LensStep::Reject => {
+                self.cx.sampler.reject();
+                self.stats.lens_steps_proposed += 1;
+                return self.stay(&mut splat);
+            }
+            LensStep::Proposed { jacobian, lens } => (jacobian, lens),
+        };
+        if self.clamp.is_finite() {
+            self.proposal.clamp_value(self.clamp);
+        }
+        let s = &mut self.stats;
+        s.lens_steps_proposed += u64::from(lens);
+        s.film_steps_proposed += u64::from(!lens);
+        s.invalid += u64::from(self.proposal.invalid());
+        let (pv, cv) = (self.proposal.value(), self.current.value());
+        let a = if cv > 0.0 && jacobian > 0.0 { (pv / cv * jacobian).min(1.0) } else { 0.0 };
+        if self.settle(if a.is_finite() { a } else { 0.0 }, &mut splat) {
+            let s = &mut self.stats;
+            s.small_steps_accepted += 1;
+            s.lens_steps_accepted += u64::from(lens);
+            s.film_steps_accepted += u64::from(!lens);
+        }
+    }
+
     fn jump(&mut self, target: &impl Target<State = S>, mut splat: impl FnMut(&mut S, f32)) {
         self.stats.mutations += 1;
         self.stats.jumps_proposed += 1;

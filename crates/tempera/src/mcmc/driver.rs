@@ -91,6 +91,9 @@ pub struct ChainSettings {
     /// The probability that a small step is a film step, which moves the state's film position
     /// alone ([`crate::sampler::PssSampler::with_film_steps`]; 0: never).
     pub film_steps: f32,
+    /// The probability that a small step is a lens step: it moves the film position as a film
+    /// step does and keeps the path's second camera vertex ([`super::lens`]; 0: never).
+    pub lens_steps: f32,
 }
 
 /// Every group's bootstrap, made before the render ([`ChainSettings::bootstrap_groups`]),

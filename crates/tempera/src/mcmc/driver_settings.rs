@@ -25,6 +25,7 @@ impl ChainSettings {
             reallot_at: 0.0,
             jumps: 0.0,
             film_steps: 0.0,
+            lens_steps: 0.0,
         }
     }
 
@@ -44,6 +45,12 @@ impl ChainSettings {
     /// ([`Self::film_steps`]).
     pub fn with_film_steps(self, p: f32) -> Self {
         Self { film_steps: p, ..self }
+    }
+
+    /// These settings with lens steps in place of small steps with probability `p`
+    /// ([`Self::lens_steps`]).
+    pub fn with_lens_steps(self, p: f32) -> Self {
+        Self { lens_steps: p, ..self }
     }
 
     /// These settings with a main-chain mutation counting as `efficiency` independent samples

@@ -115,7 +115,13 @@ fn walk_directions(scene: &Scene, prev: &Vertex, v: &Vertex, next: &Vertex) -> (
 
 /// Pins the numbers of a BSDF sample at `index` of `stream` (the lobe's number, then the
 /// direction's two).
-fn pin_bsdf(pins: &mut Vec<(Stream, usize, f32)>, stream: Stream, index: usize, inv: SampleInverse, rng: &mut Pcg32) {
+pub(super) fn pin_bsdf(
+    pins: &mut Vec<(Stream, usize, f32)>,
+    stream: Stream,
+    index: usize,
+    inv: SampleInverse,
+    rng: &mut Pcg32,
+) {
     if let Some((lo, hi)) = inv.uc {
         pins.push((stream, index, (lo + (hi - lo) * rng.next_f32()).min(BELOW_ONE)));
     }

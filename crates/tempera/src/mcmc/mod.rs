@@ -21,6 +21,7 @@ mod hybrid_plan;
 pub mod importance;
 pub mod independent;
 pub mod jump;
+pub mod lens;
 pub mod normaliser;
 pub mod stats;
 pub mod strategy;

@@ -31,6 +31,10 @@ pub struct DepthStats {
     /// they count among the small steps too.
     pub film_steps_proposed: u64,
     pub film_steps_accepted: u64,
+    /// Lens steps proposed and accepted ([`super::lens`]; where a state has none, its step is
+    /// a film step and counts among those); they count among the small steps too.
+    pub lens_steps_proposed: u64,
+    pub lens_steps_accepted: u64,
     /// Proposals whose value was NaN, infinite or negative (counted as zero).
     pub invalid: u64,
     /// The luminance the chains splatted per unit of target value, summed over their
@@ -140,6 +144,7 @@ impl DepthStats {
         w.u64(self.small_steps_proposed).u64(self.small_steps_accepted).u64(self.technique_changes);
         w.u64(self.jumps_proposed).u64(self.jumps_accepted);
         w.u64(self.film_steps_proposed).u64(self.film_steps_accepted);
+        w.u64(self.lens_steps_proposed).u64(self.lens_steps_accepted);
         w.u64(self.invalid).f64(self.seconds).f64(self.prepare_seconds);
         w.u64(self.ladder.len() as u64);
         for &a in &self.ladder {
@@ -199,6 +204,8 @@ impl DepthStats {
             jumps_accepted: r.u64(),
             film_steps_proposed: r.u64(),
             film_steps_accepted: r.u64(),
+            lens_steps_proposed: r.u64(),
+            lens_steps_accepted: r.u64(),
             invalid: r.u64(),
             seconds: r.f64(),
             prepare_seconds: r.f64(),
@@ -253,6 +260,8 @@ impl DepthStats {
         self.jumps_accepted += o.jumps_accepted;
         self.film_steps_proposed += o.film_steps_proposed;
         self.film_steps_accepted += o.film_steps_accepted;
+        self.lens_steps_proposed += o.lens_steps_proposed;
+        self.lens_steps_accepted += o.lens_steps_accepted;
         self.invalid += o.invalid;
         self.splat_weight += o.splat_weight;
         self.seconds += o.seconds;

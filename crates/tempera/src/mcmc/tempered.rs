@@ -213,6 +213,26 @@ impl Target for TemperedTarget<'_> {
         *proposal = self.evaluate(cx, std::mem::take(proposal));
         Some(proposal.evaluated.as_ref().map_or(0.0, |n| plan.jacobian(e, n, &proposal.paths)))
     }
+
+    /// A state keeps its path, so the lens step is planned from it.
+    fn lens_step(
+        &self,
+        cx: &mut EvalContext,
+        rng: &mut crate::math::rng::Pcg32,
+        current: &TemperedState,
+        proposal: &mut TemperedState,
+    ) -> super::lens::LensStep {
+        use super::lens::{LensStep, jacobian, plan};
+        let plan = current.evaluated.as_ref().and_then(|e| plan(self.scene, e, &current.paths));
+        match &plan {
+            None if current.film_unread() => return LensStep::Stay,
+            Some(p) if !p.pin(self.scene, cx, rng) => return LensStep::Reject,
+            _ => {}
+        }
+        *proposal = self.evaluate(cx, std::mem::take(proposal));
+        let jacobian = jacobian(self.scene, plan.as_ref(), proposal.evaluated.as_ref(), &proposal.paths);
+        LensStep::Proposed { jacobian, lens: plan.is_some() }
+    }
 }
 
 #[cfg(test)]

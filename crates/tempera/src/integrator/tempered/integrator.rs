@@ -40,6 +40,8 @@ pub struct TemperedIntegrator {
     pub jumps: f32,
     /// The probability that a small step is a film step ([`crate::sampler::PssSampler::with_film_steps`]).
     pub film_steps: f32,
+    /// The probability that a small step is a lens step ([`crate::mcmc::lens`]).
+    pub lens_steps: f32,
     pub large_step_probability: f32,
     /// Allot mutations by `b_k` times each depth's spread instead of `b_k` alone.
     pub spread_allocation: bool,
@@ -180,6 +182,7 @@ impl TemperedIntegrator {
             sigma: 0.01,
             jumps: DEFAULT_JUMPS,
             film_steps: DEFAULT_FILM_STEPS,
+            lens_steps: 0.0,
             large_step_probability: 0.3,
             // By b_k times spread at the depths with ensembles, by b_k (as MMLT) elsewhere:
             // measured against spread everywhere and b_k alone (README, "Allotted as MMLT
@@ -262,6 +265,7 @@ impl TemperedIntegrator {
             chains: 64,
             jumps: 0.0,
             film_steps: 0.0,
+            lens_steps: 0.0,
             ..Self::new(max_depth)
         }
     }
@@ -503,6 +507,7 @@ impl TemperedIntegrator {
         ChainSettings::new(self.bootstrap, self.chains, self.sigma, self.large_step_probability)
             .with_jumps(self.jumps)
             .with_film_steps(self.film_steps)
+            .with_lens_steps(self.lens_steps)
             .with_spread_allocation(self.spread_allocation)
             .with_spread_below(if self.spread_only_sparse { self.ensembles_below } else { 0 })
             .with_group_images(self.depth_images)

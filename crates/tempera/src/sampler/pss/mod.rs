@@ -96,6 +96,10 @@ pub struct PssSampler {
     film_sigma: f32,
     /// Whether the current proposal is a film step.
     film_step: bool,
+    /// The probability that a small step is a lens step ([`Self::with_lens_steps`]).
+    lens_step_probability: f32,
+    /// Whether the current proposal is a lens step.
+    lens_step: bool,
 }
 
 /// The indices of the entries that choose the film position in MMLT's states
@@ -139,6 +143,8 @@ impl PssSampler {
             film_step_probability: 0.0,
             film_sigma: 0.0,
             film_step: false,
+            lens_step_probability: 0.0,
+            lens_step: false,
         }
     }
 
@@ -166,8 +172,13 @@ impl PssSampler {
     pub fn start_iteration(&mut self) {
         self.iteration += 1;
         self.large_step = self.rng.next_f32() < self.large_step_probability;
-        self.film_step =
-            !self.large_step && self.film_step_probability > 0.0 && self.rng.next_f32() < self.film_step_probability;
+        (self.film_step, self.lens_step) = (false, false);
+        let (film, lens) = (self.film_step_probability, self.lens_step_probability);
+        if !self.large_step && (film > 0.0 || lens > 0.0) {
+            let r = self.rng.next_f32();
+            self.film_step = r < film;
+            self.lens_step = !self.film_step && r < film + lens;
+        }
     }
 
     /// The sampler with film steps: with probability `p` a small step moves the film position
@@ -186,12 +197,33 @@ impl PssSampler {
         self
     }
 
+    /// The sampler with lens steps: with probability `p` a small step moves the film position
+    /// as a film step does ([`Self::with_film_steps`], width `sigma`) and its chain then sets
+    /// the first camera vertex's scattering numbers so that the path keeps its second vertex
+    /// ([`crate::mcmc::lens`]); the sampler moves the film numbers and keeps every other one,
+    /// and the chain pins the rest ([`Self::pin`]). Film and lens steps share their width.
+    pub fn with_lens_steps(mut self, p: f32, sigma: f32) -> Self {
+        self.lens_step_probability = p;
+        self.film_sigma = sigma;
+        self
+    }
+
+    /// Whether the current proposal is a lens step ([`Self::with_lens_steps`]).
+    pub fn is_lens_step(&self) -> bool {
+        self.lens_step
+    }
+
+    /// The probability that a small step is a lens step.
+    pub fn lens_step_probability(&self) -> f32 {
+        self.lens_step_probability
+    }
+
     /// Begins a proposal of the kind asked for: a large step (independent uniforms) or a
     /// small one.
     pub fn start_iteration_as(&mut self, large: bool) {
         self.iteration += 1;
         self.large_step = large;
-        self.film_step = false;
+        (self.film_step, self.lens_step) = (false, false);
     }
 
     /// Begins a proposal whose entries the caller sets where it chooses ([`Self::pin`]) and
@@ -200,7 +232,13 @@ impl PssSampler {
     pub fn start_jump(&mut self) {
         self.iteration += 1;
         self.large_step = true;
-        self.film_step = false;
+        (self.film_step, self.lens_step) = (false, false);
+    }
+
+    /// The value entry `index` of `stream` holds (`None` where no state has touched it yet).
+    pub fn value(&self, stream: Stream, index: usize) -> Option<f32> {
+        let e = self.entries.get(stream_id(stream) + STREAMS * index)?;
+        (e.modified != UNTOUCHED).then_some(e.value)
     }
 
     /// Sets entry `index` of `stream` to `value` in the proposal [`Self::start_jump`] began
@@ -296,9 +334,9 @@ impl PssSampler {
                 e.modified = last_large;
             }
             let skipped = (iteration - e.modified) as f32;
-            // A film step moves the film position by its own width and every other entry by
-            // none; the iterations skipped before it by the small steps' width.
-            let width = match (self.film_step, FILM.contains(&index)) {
+            // A film or lens step moves the film position by its own width and every other
+            // entry by none; the iterations skipped before it by the small steps' width.
+            let width = match (self.film_step || self.lens_step, FILM.contains(&index)) {
                 (false, _) => self.sigma * skipped.sqrt(),
                 (true, film) => {
                     let own = if film { self.film_sigma } else { 0.0 };
