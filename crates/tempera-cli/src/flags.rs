@@ -44,7 +44,8 @@ pub struct IntegratorFlags {
     pub film_steps: Option<f32>,
     /// MMLT and tempered MMLT: the probability that a small step is a lens step, which moves
     /// the film position as a film step does and re-aims the first camera vertex at the path's
-    /// second, keeping the rest of the path (default 0: never). Film and lens steps share the
+    /// second, keeping the rest of the path (MMLT's default 0: never; tempered MMLT's 0.3, on
+    /// top of its film steps' 0.3). Film and lens steps share the
     /// small steps: a lens step takes what the film steps leave of the probability.
     #[arg(long)]
     pub lens_steps: Option<f32>,

@@ -63,6 +63,17 @@ fn settings_are_checked_against_the_integrator_and_each_other() {
             IntegratorSettings { jumps: Some(0.0), paper: Some(true), ..Default::default() },
             "fixes jumps",
         ),
+        (IntegratorKind::Bdpt, IntegratorSettings { lens_steps: Some(0.1), ..Default::default() }, "lens_steps is not"),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { lens_steps: Some(1.01), ..Default::default() },
+            "lens_steps must be",
+        ),
+        (
+            IntegratorKind::Tempered,
+            IntegratorSettings { lens_steps: Some(0.3), paper: Some(true), ..Default::default() },
+            "fixes lens_steps",
+        ),
         (
             IntegratorKind::Mmlt,
             IntegratorSettings { importance_pilot: Some(2000), ..Default::default() },

@@ -172,6 +172,10 @@ pub const DEFAULT_JUMPS: f32 = 0.05;
 /// step (README, "Film steps").
 pub const DEFAULT_FILM_STEPS: f32 = 0.3;
 
+/// [`TemperedIntegrator::lens_steps`]' default: the probability that a small step is a lens
+/// step, on top of the film steps' (README, "Lens steps").
+pub const DEFAULT_LENS_STEPS: f32 = 0.3;
+
 impl TemperedIntegrator {
     pub fn new(max_depth: u32) -> Self {
         Self {
@@ -182,7 +186,7 @@ impl TemperedIntegrator {
             sigma: 0.01,
             jumps: DEFAULT_JUMPS,
             film_steps: DEFAULT_FILM_STEPS,
-            lens_steps: 0.0,
+            lens_steps: DEFAULT_LENS_STEPS,
             large_step_probability: 0.3,
             // By b_k times spread at the depths with ensembles, by b_k (as MMLT) elsewhere:
             // measured against spread everywhere and b_k alone (README, "Allotted as MMLT

@@ -18,7 +18,7 @@ fn one_replica_reproduces_mmlt_exactly() {
     // With the same allotment of mutations to depths (tempered MMLT's default is by spread).
     // And with the depths whose bootstrap has fewer than 1500 non-zero values of 5000 sampled
     // independently. And with tempered MMLT's per-pixel shaping, which shapes this scene, and
-    // its jumps between techniques and film steps.
+    // its jumps between techniques, film steps and lens steps.
     for (spread_allocation, independent_below) in [(false, 0), (true, 0), (true, 1500)] {
         let mmlt = MmltIntegrator {
             bootstrap: 5_000,
@@ -28,6 +28,7 @@ fn one_replica_reproduces_mmlt_exactly() {
             importance_pilot: TemperedIntegrator::new(5).importance_pilot,
             jumps: TemperedIntegrator::new(5).jumps,
             film_steps: TemperedIntegrator::new(5).film_steps,
+            lens_steps: TemperedIntegrator::new(5).lens_steps,
             ..MmltIntegrator::new(5)
         };
         let tempered = TemperedIntegrator {
@@ -265,9 +266,16 @@ fn ensembles_only_where_the_bootstrap_is_sparse() {
     let control = RenderControl::new(&cancel, &|_| {});
     // Shaped as tempered MMLT's defaults shape (where the pilot chooses to), jumping and
     // moving the film position as they do.
-    let TemperedIntegrator { importance_pilot, jumps, film_steps, .. } = TemperedIntegrator::new(5);
-    let mmlt =
-        MmltIntegrator { bootstrap: 20_000, chains: 16, importance_pilot, jumps, film_steps, ..MmltIntegrator::new(5) };
+    let TemperedIntegrator { importance_pilot, jumps, film_steps, lens_steps, .. } = TemperedIntegrator::new(5);
+    let mmlt = MmltIntegrator {
+        bootstrap: 20_000,
+        chains: 16,
+        importance_pilot,
+        jumps,
+        film_steps,
+        lens_steps,
+        ..MmltIntegrator::new(5)
+    };
     let t = TemperedIntegrator {
         bootstrap: 20_000,
         chains: 16,
