@@ -442,10 +442,8 @@ impl<S: State> Chain<S> {
 }
 
 impl<S: State> Chain<S> {
-    /// A reversible jump ([`Target::jump`]) in place of a mutation, accepted with
-    /// `min(1, f(y)/f(x) · J)`; where none is begun the current state stays and splats alone.
-    /// A lens step ([`super::lens`]), begun by the sampler: a film step where the state has
-    /// none.
+    /// A lens step ([`super::lens`]), begun by the sampler (a film step where the state has
+    /// none), accepted with `min(1, f(y)/f(x) · J)`.
     fn lens(&mut self, target: &impl Target<State = S>, mut splat: impl FnMut(&mut S, f32)) {
         let s = &mut self.stats;
         s.mutations += 1;
@@ -480,6 +478,8 @@ impl<S: State> Chain<S> {
         }
     }
 
+    /// A reversible jump ([`Target::jump`]) in place of a mutation, accepted with
+    /// `min(1, f(y)/f(x) · J)`; where none is begun the current state stays and splats alone.
     fn jump(&mut self, target: &impl Target<State = S>, mut splat: impl FnMut(&mut S, f32)) {
         self.stats.mutations += 1;
         self.stats.jumps_proposed += 1;

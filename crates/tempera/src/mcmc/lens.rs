@@ -219,7 +219,7 @@ mod tests {
                 if !(0.0..1.0).contains(&film.x) || !(0.0..1.0).contains(&film.y) {
                     continue;
                 }
-                let Some((v, j, new)) = step(&scene, &n, film) else { continue };
+                let Some((_, j, new)) = step(&scene, &n, film) else { continue };
                 // Central differences of the map v → v' at the fixed film offset.
                 let h = 2e-3;
                 let moved = |dv: Vec2| {
