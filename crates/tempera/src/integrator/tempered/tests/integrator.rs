@@ -81,7 +81,9 @@ fn every_swap_strategy_agrees_with_bdpt_on_a_cornell_box_and_the_furnace() {
         let swaps = out.chains[1].swaps.as_ref().unwrap();
         let exchanged: u64 = swaps.accepted.iter().sum::<u64>() + swaps.non_identity;
         assert!(exchanged > swaps.steps / 2, "{swap:?}: states move between replicas: {swaps:?}");
-        let out = t.render(&furnace, &settings(128, 3, 0), &control).unwrap();
+        // Film and lens steps make neighbouring mutations alike; at 128 mutations per pixel the
+        // sphere's mean spreads by about 0.01 over seeds, the test's tolerance.
+        let out = t.render(&furnace, &settings(512, 3, 0), &control).unwrap();
         let (sphere, sky) = classify_furnace_pixels(&furnace);
         let m = |idx: &[usize]| idx.iter().map(|&i| f64::from(out.image.pixels[i].y)).sum::<f64>() / idx.len() as f64;
         assert!((m(&sphere) - 0.8).abs() < 0.01, "{swap:?}: furnace sphere {}", m(&sphere));
