@@ -114,20 +114,20 @@ fn walk_directions(scene: &Scene, prev: &Vertex, v: &Vertex, next: &Vertex) -> (
 }
 
 /// Pins the numbers of a BSDF sample at `index` of `stream` (the lobe's number, then the
-/// direction's two).
+/// direction's two), each given to `pin` as `(stream, index, value)`.
 pub(super) fn pin_bsdf(
-    pins: &mut Vec<(Stream, usize, f32)>,
+    mut pin: impl FnMut((Stream, usize, f32)),
     stream: Stream,
     index: usize,
     inv: SampleInverse,
     rng: &mut Pcg32,
 ) {
     if let Some((lo, hi)) = inv.uc {
-        pins.push((stream, index, (lo + (hi - lo) * rng.next_f32()).min(BELOW_ONE)));
+        pin((stream, index, (lo + (hi - lo) * rng.next_f32()).min(BELOW_ONE)));
     }
     if let Some(u) = inv.u {
-        pins.push((stream, index + 1, u.x));
-        pins.push((stream, index + 2, u.y));
+        pin((stream, index + 1, u.x));
+        pin((stream, index + 2, u.y));
     }
 }
 
@@ -165,7 +165,7 @@ pub fn plan(scene: &Scene, k: usize, e: &Evaluated, paths: &Paths, rng: &mut Pcg
             let v = path[camera - i];
             let (wo, wi) = walk_directions(scene, path[camera - i + 1], v, path[camera - i - 1]);
             let inv = v.bsdf?.sample_inverse(wo, wi)?;
-            pin_bsdf(&mut pins, Stream::Camera, 3 + 3 * (i - 1), inv, rng);
+            pin_bsdf(|p| pins.push(p), Stream::Camera, 3 + 3 * (i - 1), inv, rng);
         }
     }
     // The light: its choice, then (light subpath) its emission and a BSDF sample at each vertex
@@ -189,7 +189,7 @@ pub fn plan(scene: &Scene, k: usize, e: &Evaluated, paths: &Paths, rng: &mut Pcg
         for j in 1..s - 1 {
             let (wo, wi) = walk_directions(scene, path[j - 1], path[j], path[j + 1]);
             let inv = path[j].bsdf?.sample_inverse(wo, wi)?;
-            pin_bsdf(&mut pins, Stream::Light, 5 + 3 * (j - 1), inv, rng);
+            pin_bsdf(|p| pins.push(p), Stream::Light, 5 + 3 * (j - 1), inv, rng);
         }
     } else if s == 1 {
         pins.push((Stream::Connection, 0, u_light));

@@ -101,11 +101,13 @@ impl Plan {
         let (p, ng) = (it.surface.p, it.surface.ng);
         let wi = (self.x2 - offset_origin(p, ng, self.x2 - p)).normalize();
         let Some(inverse) = bsdf.sample_inverse(it.wo, wi) else { return false };
-        let mut pins = Vec::with_capacity(3);
-        pin_bsdf(&mut pins, Stream::Camera, FIRST_VERTEX, inverse, rng);
-        for (stream, index, value) in pins {
-            sampler.pin(stream, index, value);
-        }
+        pin_bsdf(
+            |(stream, index, value)| sampler.pin(stream, index, value),
+            Stream::Camera,
+            FIRST_VERTEX,
+            inverse,
+            rng,
+        );
         true
     }
 
@@ -132,7 +134,8 @@ pub fn jacobian(scene: &Scene, plan: Option<&Plan>, new: Option<&Evaluated>, pat
     match (plan, new) {
         (Some(plan), Some(new)) => plan.jacobian(new, paths),
         (Some(_), None) => 0.0,
-        (None, new) => f32::from(u8::from(new.and_then(|e| self::plan(scene, e, paths)).is_none())),
+        (None, new) if new.and_then(|e| self::plan(scene, e, paths)).is_some() => 0.0,
+        (None, _) => 1.0,
     }
 }
 
