@@ -128,12 +128,13 @@ impl Plan {
 
 /// The Jacobian with which the proposal `new` (its subpaths in `paths`; `None`: not evaluated as
 /// one strategy) of a lens step planned as `plan`, or of a film step where the state had no
-/// lens step (`plan` `None`), is accepted: [`Plan::jacobian`], or for a film step 1 where the
+/// lens step (`plan` `None`), is accepted: for a lens step [`Plan::jacobian`] where the proposal
+/// has a lens step too (the step back) and 0 where it has none; for a film step 1 where the
 /// proposal has no lens step either and 0 where it has one.
 pub fn jacobian(scene: &Scene, plan: Option<&Plan>, new: Option<&Evaluated>, paths: &Paths) -> f32 {
     match (plan, new) {
-        (Some(plan), Some(new)) => plan.jacobian(new, paths),
-        (Some(_), None) => 0.0,
+        (Some(plan), Some(new)) if self::plan(scene, new, paths).is_some() => plan.jacobian(new, paths),
+        (Some(_), _) => 0.0,
         (None, new) if new.and_then(|e| self::plan(scene, e, paths)).is_some() => 0.0,
         (None, _) => 1.0,
     }
